@@ -1,0 +1,230 @@
+"""Public entry points of the physics engine: validate, build arrays, call a kernel, measure.
+
+`simulate` runs one robot (optionally recording a trajectory); `simulate_batch` runs many robots
+that share settings together in the SIMD kernel, split over threads, and gives bit-identical
+positions to running each alone (tests/core/test_physics.py checks this).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import defaultdict
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+
+from core.physics import kernels
+from core.robot import Mechanics, Robot, build_mechanics
+from core.settings import SimSettings
+
+#: Robots per SIMD batch: wide enough to fill the vector lanes, small enough to stay in cache.
+DEFAULT_LANES = 32
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Mass positions over time, for replays: frames [F, M, 3] (m) at `times` [F] (s)."""
+
+    times: np.ndarray
+    frames: np.ndarray
+    springs: np.ndarray  # [S, 2] mass indices
+    stiffness: np.ndarray  # [S] (N/m), to colour springs by material
+
+    def to_json(self) -> dict:
+        return {
+            "format": "softevo.trajectory/1",
+            "times": [round(t, 9) for t in self.times.tolist()],
+            "springs": self.springs.tolist(),
+            "stiffness": self.stiffness.tolist(),
+            "frames": np.round(self.frames, 6).tolist(),
+        }
+
+
+@dataclass(frozen=True)
+class SimResult:
+    """Outcome of one simulation. Fitness is `speed`: NaN when the simulation blew up."""
+
+    masses: int
+    springs: int
+    steps: int
+    com_start: tuple[float, float, float]  # centre of mass at settle_time (m)
+    com_end: tuple[float, float, float]  # centre of mass at the end (m)
+    distance: float  # net horizontal displacement of the centre of mass (m)
+    speed: float  # distance / measured time (m/s)
+    wall_seconds: float
+    stable: bool  # every position finite at the end
+    final_positions: np.ndarray  # [M, 3] (m)
+
+    def to_json(self) -> dict:
+        """The `softevo simulate` output (no final positions)."""
+        return {
+            "masses": self.masses,
+            "springs": self.springs,
+            "steps": self.steps,
+            "com_start": list(self.com_start),
+            "com_end": list(self.com_end),
+            "distance": _json_float(self.distance),
+            "speed": _json_float(self.speed),
+            "wall_seconds": self.wall_seconds,
+            "stable": self.stable,
+        }
+
+
+def _json_float(value: float) -> float | None:
+    return value if math.isfinite(value) else None
+
+
+def _scalars(mech: Mechanics) -> tuple:
+    sim = mech.sim
+    return (
+        mech.omega,
+        sim.dt,
+        sim.n_steps,
+        sim.mass * sim.gravity,
+        sim.ground_stiffness,
+        sim.friction,
+        sim.damping,
+        sim.settle_steps,
+    )
+
+
+def _result(mech: Mechanics, start: np.ndarray, end: np.ndarray, wall: float) -> SimResult:
+    """Build a result from positions [M, 3] at settle time and at the end."""
+    com_start = start.mean(axis=0)
+    com_end = end.mean(axis=0)
+    stable = bool(np.isfinite(end).all())
+    distance = float(np.hypot(*(com_end[:2] - com_start[:2]))) if stable else math.nan
+    return SimResult(
+        masses=mech.n_masses,
+        springs=mech.n_springs,
+        steps=mech.sim.n_steps,
+        com_start=tuple(float(v) for v in com_start),
+        com_end=tuple(float(v) for v in com_end),
+        distance=distance,
+        speed=distance / mech.sim.measured_time,
+        wall_seconds=wall,
+        stable=stable,
+        final_positions=end,
+    )
+
+
+def simulate(
+    robot: Robot | Mechanics, *, record_every: int = 0
+) -> tuple[SimResult, Trajectory | None]:
+    """Simulate one robot; with `record_every` > 0 also return positions every that many steps."""
+    mech = robot if isinstance(robot, Mechanics) else build_mechanics(robot)
+    n_steps = mech.sim.n_steps
+    pos = np.ascontiguousarray(mech.positions.T)  # [3, M]
+    vel = np.zeros_like(pos)
+    settle = np.empty_like(pos)
+    n_frames = len(range(0, n_steps, record_every)) + 1 if record_every > 0 else 0
+    frames = np.empty((n_frames, 3, mech.n_masses))
+    step_factor = np.full(mech.n_masses, mech.sim.dt / mech.sim.mass)
+    omega, dt, steps, weight, ground_k, friction, damping, settle_step = _scalars(mech)
+    springs = mech.lattice.springs
+    started = time.perf_counter()
+    kernels.simulate_one(
+        pos[0], pos[1], pos[2], vel[0], vel[1], vel[2], step_factor,
+        np.ascontiguousarray(springs[:, 0]), np.ascontiguousarray(springs[:, 1]),
+        mech.stiffness, mech.rest_length, mech.amp_sin, mech.amp_cos,
+        omega, dt, steps, weight, ground_k, friction, damping,
+        settle_step, settle[0], settle[1], settle[2], record_every, frames,
+    )  # fmt: skip
+    wall = time.perf_counter() - started
+    result = _result(mech, settle.T, pos.T.copy(), wall)
+    if not record_every:
+        return result, None
+    times = np.array([*range(0, n_steps, record_every), n_steps], dtype=np.float64) * dt
+    trajectory = Trajectory(
+        times=times,
+        frames=frames.transpose(0, 2, 1).copy(),
+        springs=springs,
+        stiffness=mech.stiffness,
+    )
+    return result, trajectory
+
+
+def _run_group(group: list[Mechanics]) -> list[SimResult]:
+    """Run robots that share settings and omega in one `simulate_many` call."""
+    first = group[0]
+    nx, ny, _ = first.lattice.shape
+    n_points = (nx + 1) * (ny + 1) * (first.lattice.shape[2] + 1)
+    # The batch topology is the union of the robots' springs, in lattice-point numbering.
+    spring_points = [m.lattice.points[m.lattice.springs] for m in group]
+    keys = [p[:, 0] * n_points + p[:, 1] for p in spring_points]
+    union_keys = np.unique(np.concatenate(keys))
+    union_points = np.unique(np.concatenate([m.lattice.points for m in group]))
+    spring_a, spring_b = (np.searchsorted(union_points, p) for p in np.divmod(union_keys, n_points))
+    n_masses, n_springs, n_robots = len(union_points), len(union_keys), len(group)
+
+    # Padding masses sit at their own lattice point (distinct from every real mass) and never move.
+    grid = (first.lattice.shape[2] + 1, ny + 1, nx + 1)
+    lattice_xyz = np.stack(np.unravel_index(union_points, grid)[::-1]) * first.sim.edge_length
+    pos = np.repeat(lattice_xyz[:, :, None], n_robots, axis=2)
+    step_factor = np.zeros((n_masses, n_robots))
+    params = np.zeros((4, n_springs, n_robots))
+    mass_rows, spring_rows = [], []
+    for r, (mech, key) in enumerate(zip(group, keys, strict=True)):
+        rows = np.searchsorted(union_points, mech.lattice.points)
+        srows = np.searchsorted(union_keys, key)
+        lift = mech.positions[0, 2] - mech.lattice.rest_positions[0, 2] * mech.sim.edge_length
+        pos[2, :, r] += lift
+        pos[:, rows, r] = mech.positions.T
+        step_factor[rows, r] = mech.sim.dt / mech.sim.mass
+        params[:, srows, r] = (mech.stiffness, mech.rest_length, mech.amp_sin, mech.amp_cos)
+        mass_rows.append(rows)
+        spring_rows.append(srows)
+    vel = np.zeros_like(pos)
+    settle = np.empty_like(pos)
+    started = time.perf_counter()
+    kernels.simulate_many(
+        pos[0], pos[1], pos[2], vel[0], vel[1], vel[2], step_factor, spring_a, spring_b,
+        params[0], params[1], params[2], params[3], *_scalars(first),
+        settle[0], settle[1], settle[2],
+    )  # fmt: skip
+    wall = (time.perf_counter() - started) / n_robots
+    return [
+        _result(mech, settle[:, rows, r].T, pos[:, rows, r].T.copy(), wall)
+        for r, (mech, rows) in enumerate(zip(group, mass_rows, strict=True))
+    ]
+
+
+def _group_key(mech: Mechanics) -> tuple[tuple[int, int, int], SimSettings, float]:
+    return (mech.lattice.shape, mech.sim, mech.omega)
+
+
+def simulate_batch(
+    robots: Sequence[Robot | Mechanics], *, threads: int = 1, lanes: int = DEFAULT_LANES
+) -> list[SimResult]:
+    """Simulate many robots; results in input order.
+
+    Robots with the same grid shape, settings and actuation frequency run together, `lanes` at a
+    time in the SIMD kernel; chunks run on `threads` threads (the kernel releases the GIL).
+    `wall_seconds` of each result is its share of its chunk's time.
+    """
+    if threads < 1 or lanes < 1:
+        raise ValueError(f"threads and lanes must be >= 1, got {threads} and {lanes}")
+    mechs = [r if isinstance(r, Mechanics) else build_mechanics(r) for r in robots]
+    groups: dict[tuple, list[int]] = defaultdict(list)
+    for index, mech in enumerate(mechs):
+        groups[_group_key(mech)].append(index)
+    chunks = []
+    for members in groups.values():
+        width = min(lanes, -(-len(members) // threads))
+        chunks += [members[start : start + width] for start in range(0, len(members), width)]
+    results: list[SimResult | None] = [None] * len(mechs)
+
+    def run(chunk: list[int]) -> None:
+        for index, result in zip(chunk, _run_group([mechs[i] for i in chunk]), strict=True):
+            results[index] = result
+
+    if threads == 1 or len(chunks) == 1:
+        for chunk in chunks:
+            run(chunk)
+    else:
+        with ThreadPoolExecutor(max_workers=threads) as pool:
+            list(pool.map(run, chunks))
+    return results  # type: ignore[return-value]

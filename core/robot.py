@@ -1,0 +1,191 @@
+"""Robots: voxel grids with material labels, or lattices whose springs carry their own parameters,
+and the rule that turns either into per-spring stiffness and rest-length actuation.
+
+Actuation follows the paper's L0(t) = a + b*sin(w*t + c), read relative to each spring's rest
+length L (so it does not depend on `edge_length`):
+
+* a voxel labelled `sine` gives its springs L*(1 + offset_scale*a + amplitude_scale*b*sin(w t + c)),
+  `neg_sine` the same with -sin; a, b, c are the robot's actuation genes and w is `sim.omega`;
+* a spring with its own option [k, b, w, c] (the paper's phase 2 cube) has L*(1 + b*sin(w t + c)).
+
+A spring shared by several voxels is the parallel combination of each voxel's own spring:
+stiffness k = sum(k_v), rest length sum(k_v * L_v(t)) / k. This is exact: it gives the same force
+as keeping every voxel's 28 springs separately, so a shared face is stiffer, as a solid is.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from core.lattice import Lattice, LatticeError, build_lattice
+from core.settings import SimSettings
+
+LABELS = ("empty", "soft", "hard", "sine", "neg_sine")
+ACTUATED_LABELS = ("sine", "neg_sine")
+#: Bounds of the paper's phase 3 actuation genes.
+GENE_BOUNDS = {"a": (-1.0, 1.0), "b": (-math.pi / 2, math.pi / 2), "c": (-2 * math.pi, 2 * math.pi)}
+
+
+class RobotError(ValueError):
+    """A robot that cannot be built; the message names the offending field."""
+
+
+@dataclass(frozen=True)
+class Actuation:
+    """Per-robot actuation genes of sine / neg_sine voxels (paper phase 3)."""
+
+    a: float = 0.0
+    b: float = 0.0
+    c: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class VoxelRobot:
+    """A grid of labelled voxels; labels are listed x fastest, then y, then z."""
+
+    shape: tuple[int, int, int]
+    voxels: tuple[str, ...]
+    actuation: Actuation = Actuation()
+    sim: SimSettings = field(default_factory=SimSettings)
+
+
+@dataclass(frozen=True, eq=False)
+class SpringRobot:
+    """A lattice whose springs each carry [k, b, w, c] (the paper's phase 2 cube is 1x1x1).
+
+    `filled` marks the voxels of the morphology; `springs` is a float array [S, 4] in the
+    canonical spring order of `core.lattice`.
+    """
+
+    shape: tuple[int, int, int]
+    filled: tuple[bool, ...]
+    springs: np.ndarray
+    sim: SimSettings = field(default_factory=SimSettings)
+
+
+Robot = VoxelRobot | SpringRobot
+
+
+@dataclass(frozen=True, eq=False)
+class Mechanics:
+    """Everything the kernel needs for one robot, as flat float64 / int64 arrays.
+
+    Rest length of spring s at time t: rest_length[s] + amp_sin[s]*sin(omega t)
+    + amp_cos[s]*cos(omega t) (the phase is folded into the two amplitudes).
+    """
+
+    lattice: Lattice
+    positions: np.ndarray  # [M, 3] initial positions (m)
+    stiffness: np.ndarray  # [S] (N/m)
+    rest_length: np.ndarray  # [S] (m)
+    amp_sin: np.ndarray  # [S] (m)
+    amp_cos: np.ndarray  # [S] (m)
+    omega: float  # (rad/s)
+    sim: SimSettings
+
+    @property
+    def n_masses(self) -> int:
+        return self.lattice.n_masses
+
+    @property
+    def n_springs(self) -> int:
+        return self.lattice.n_springs
+
+
+def _initial_positions(lattice: Lattice, sim: SimSettings) -> np.ndarray:
+    positions = lattice.rest_positions * sim.edge_length
+    positions[:, 2] += sim.drop_height - positions[:, 2].min()
+    return positions
+
+
+def _voxel_materials(robot: VoxelRobot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-voxel stiffness (N/m), relative rest offset and signed relative amplitude."""
+    sim, genes = robot.sim, robot.actuation
+    table = {
+        "empty": (0.0, 0.0, 0.0),
+        "soft": (sim.soft_stiffness, 0.0, 0.0),
+        "hard": (sim.hard_stiffness, 0.0, 0.0),
+        "sine": (sim.actuated_stiffness, sim.offset_scale * genes.a, sim.amplitude_scale * genes.b),
+        "neg_sine": (
+            sim.actuated_stiffness,
+            sim.offset_scale * genes.a,
+            -sim.amplitude_scale * genes.b,
+        ),
+    }
+    rows = np.array([table[label] for label in robot.voxels], dtype=np.float64)
+    return rows[:, 0], rows[:, 1], rows[:, 2]
+
+
+def _voxel_mechanics(robot: VoxelRobot) -> Mechanics:
+    unknown = sorted({label for label in robot.voxels if label not in LABELS})
+    if unknown:
+        raise RobotError(f"voxels: unknown label {unknown[0]!r} (labels: {', '.join(LABELS)})")
+    filled = np.array([label != "empty" for label in robot.voxels])
+    try:
+        lattice = build_lattice(filled, robot.shape)
+    except LatticeError as error:
+        raise RobotError(f"voxels: {error}") from None
+    voxel_k, voxel_offset, voxel_amp = _voxel_materials(robot)
+    spring, voxel = lattice.spring_voxels.T
+    keep = lattice.kept[voxel]
+    spring, voxel = spring[keep], voxel[keep]
+    n = lattice.n_springs
+    k = np.bincount(spring, weights=voxel_k[voxel], minlength=n)
+    weighted_offset = np.bincount(spring, weights=voxel_k[voxel] * voxel_offset[voxel], minlength=n)
+    weighted_amp = np.bincount(spring, weights=voxel_k[voxel] * voxel_amp[voxel], minlength=n)
+    safe_k = np.where(k > 0, k, 1.0)
+    length = lattice.spring_lengths * robot.sim.edge_length
+    amplitude = length * (weighted_amp / safe_k)
+    c = robot.actuation.c
+    return Mechanics(
+        lattice=lattice,
+        positions=_initial_positions(lattice, robot.sim),
+        stiffness=k,
+        rest_length=length * (1.0 + weighted_offset / safe_k),
+        amp_sin=amplitude * math.cos(c),
+        amp_cos=amplitude * math.sin(c),
+        omega=robot.sim.omega if np.any(amplitude != 0) else 0.0,
+        sim=robot.sim,
+    )
+
+
+def _spring_mechanics(robot: SpringRobot) -> Mechanics:
+    try:
+        lattice = build_lattice(np.array(robot.filled, dtype=bool), robot.shape)
+    except LatticeError as error:
+        raise RobotError(f"voxels: {error}") from None
+    options = np.asarray(robot.springs, dtype=np.float64)
+    if options.shape != (lattice.n_springs, 4):
+        raise RobotError(
+            f"springs: expected {lattice.n_springs} entries of [k, b, w, c] (the springs of the "
+            f"built lattice), got array of shape {list(options.shape)}"
+        )
+    k, b, w, c = options.T
+    omegas = sorted(set(w[b != 0].tolist()))
+    if len(omegas) > 1:
+        raise RobotError(
+            f"springs: actuated springs (b != 0) must share one frequency w, got {omegas}"
+        )
+    length = lattice.spring_lengths * robot.sim.edge_length
+    return Mechanics(
+        lattice=lattice,
+        positions=_initial_positions(lattice, robot.sim),
+        stiffness=k.copy(),
+        rest_length=length.copy(),
+        amp_sin=length * b * np.cos(c),
+        amp_cos=length * b * np.sin(c),
+        omega=omegas[0] if omegas else 0.0,
+        sim=robot.sim,
+    )
+
+
+def build_mechanics(robot: Robot) -> Mechanics:
+    """Turn a robot into the arrays the physics kernel runs on."""
+    if isinstance(robot, VoxelRobot):
+        return _voxel_mechanics(robot)
+    if isinstance(robot, SpringRobot):
+        return _spring_mechanics(robot)
+    raise TypeError(f"not a robot: {type(robot).__name__}")

@@ -1,0 +1,110 @@
+"""Simulation settings: every physical number the engine uses, with the paper's values as defaults.
+
+Where the paper gives a number (dt, damping, friction, ground stiffness, mass, the two spring
+stiffnesses, gravity) it is the default here. Where the paper is silent (duration, drop height,
+settling, how actuation genes map to rest lengths) the default is our choice; `docs/physics.md`
+says why. Every value is validated on construction so a bad setting is refused before anything runs.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+#: Largest number of integration steps one simulation may take (duration / dt).
+MAX_STEPS = 20_000_000
+
+
+class SimSettings(BaseModel):
+    """Physical and numerical settings of one simulation. Units are SI (m, s, kg, N)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    dt: float = Field(0.0005, gt=0, le=0.01, description="integration time step (s)")
+    duration: float = Field(10.0, gt=0, le=3600, description="simulated time (s)")
+    gravity: float = Field(-9.81, ge=-1000, le=1000, description="acceleration along z (m/s^2)")
+    damping: float = Field(
+        0.99, gt=0, le=1, description="factor applied to every velocity each step; 1.0 = none"
+    )
+    ground_stiffness: float = Field(
+        10000.0, ge=0, le=1e8, description="penalty spring of the ground at z = 0 (N/m)"
+    )
+    friction: float = Field(0.6, ge=0, le=10, description="Coulomb friction coefficient")
+    mass: float = Field(0.1, gt=0, le=1e4, description="mass of every point (kg)")
+    edge_length: float = Field(1.0, gt=0, le=100, description="voxel edge length (m)")
+    drop_height: float = Field(
+        0.0, ge=0, le=1000, description="height of the robot's lowest point at t = 0 (m)"
+    )
+    omega: float = Field(
+        1.0, ge=0, le=1e4, description="angular frequency w of voxel actuation (rad/s)"
+    )
+    soft_stiffness: float = Field(500.0, ge=0, le=1e8, description="soft voxel springs (N/m)")
+    hard_stiffness: float = Field(2000.0, ge=0, le=1e8, description="hard voxel springs (N/m)")
+    actuated_stiffness: float = Field(
+        2000.0, ge=0, le=1e8, description="springs of sine / neg_sine voxels (N/m)"
+    )
+    offset_scale: float = Field(
+        0.1, ge=0, le=1, description="rest-length offset per unit of gene a (fraction of length)"
+    )
+    amplitude_scale: float = Field(
+        0.1, ge=0, le=1, description="rest-length amplitude per unit of gene b (fraction)"
+    )
+    settle_time: float = Field(
+        1.0, ge=0, description="time (s) at which the fitness clock and com_start start"
+    )
+
+    @model_validator(mode="after")
+    def _check_times(self) -> SimSettings:
+        if self.settle_time >= self.duration:
+            raise ValueError(
+                f"settle_time ({self.settle_time} s) must be shorter than duration "
+                f"({self.duration} s)"
+            )
+        if self.n_steps > MAX_STEPS:
+            raise ValueError(
+                f"duration / dt = {self.n_steps} steps, more than the limit of {MAX_STEPS}"
+            )
+        return self
+
+    @property
+    def n_steps(self) -> int:
+        """Number of integration steps: duration / dt, rounded to the nearest integer."""
+        return max(1, round(self.duration / self.dt))
+
+    @property
+    def settle_steps(self) -> int:
+        """Step at which the fitness clock starts."""
+        return round(self.settle_time / self.dt)
+
+    @property
+    def measured_time(self) -> float:
+        """Seconds between the fitness clock's start and the end of the simulation."""
+        return (self.n_steps - self.settle_steps) * self.dt
+
+
+def sim_settings(overrides: dict[str, Any] | None = None, base: SimSettings | None = None) -> SimSettings:
+    """Return `base` (default: the paper's settings) with `overrides` applied and validated."""
+    merged = (base or SimSettings()).model_dump()
+    merged.update(overrides or {})
+    return SimSettings.model_validate(merged)
+
+
+def format_validation_error(error: ValidationError, prefix: str = "") -> str:
+    """One line naming the first offending field, e.g. `sim.dt: Input should be greater than 0`."""
+    first = error.errors()[0]
+    location = ".".join(str(part) for part in (prefix, *first["loc"]) if part != "")
+    message = first["msg"].removeprefix("Value error, ")
+    more = len(error.errors()) - 1
+    suffix = f" (and {more} more problem{'s' if more > 1 else ''})" if more else ""
+    return f"{location or 'value'}: {message}{suffix}"
+
+
+def is_finite_number(value: object) -> bool:
+    """True for an int or float that is neither NaN nor infinite (bool is not a number here)."""
+    return (
+        isinstance(value, int | float)
+        and not isinstance(value, bool)
+        and math.isfinite(float(value))
+    )
