@@ -87,10 +87,10 @@ def largest_component(filled: np.ndarray, shape: tuple[int, int, int]) -> np.nda
             size += 1
             for dz, dy, dx in ((1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1)):
                 zz, yy, xx = z + dz, y + dy, x + dx
-                if 0 <= zz < nz and 0 <= yy < ny and 0 <= xx < nx and grid[zz, yy, xx]:
-                    if labels[zz, yy, xx] < 0:
-                        labels[zz, yy, xx] = n_labels
-                        stack.append((zz, yy, xx))
+                inside = 0 <= zz < nz and 0 <= yy < ny and 0 <= xx < nx
+                if inside and grid[zz, yy, xx] and labels[zz, yy, xx] < 0:
+                    labels[zz, yy, xx] = n_labels
+                    stack.append((zz, yy, xx))
         if size > best_size:
             best_label, best_size = n_labels, size
         n_labels += 1

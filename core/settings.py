@@ -20,7 +20,7 @@ MAX_STEPS = 20_000_000
 class SimSettings(BaseModel):
     """Physical and numerical settings of one simulation. Units are SI (m, s, kg, N)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 
     dt: float = Field(0.0005, gt=0, le=0.01, description="integration time step (s)")
     duration: float = Field(10.0, gt=0, le=3600, description="simulated time (s)")
@@ -84,7 +84,9 @@ class SimSettings(BaseModel):
         return (self.n_steps - self.settle_steps) * self.dt
 
 
-def sim_settings(overrides: dict[str, Any] | None = None, base: SimSettings | None = None) -> SimSettings:
+def sim_settings(
+    overrides: dict[str, Any] | None = None, base: SimSettings | None = None
+) -> SimSettings:
     """Return `base` (default: the paper's settings) with `overrides` applied and validated."""
     merged = (base or SimSettings()).model_dump()
     merged.update(overrides or {})

@@ -1,0 +1,226 @@
+"""The robot file, `softevo.robot/1`: a stable JSON form of every robot softevo makes or reads.
+
+    {"format": "softevo.robot/1",
+     "shape": [nx, ny, nz],
+     "voxels": [label, ...],                 # nx*ny*nz labels, x fastest, then y, then z
+     "actuation": {"a": .., "b": .., "c": ..},   # genes of sine / neg_sine voxels
+     "sim": {"dt": .., ...}}                 # overrides of the default SimSettings
+
+A robot whose springs carry their own [k, b, w, c] (the paper's phase 2 cube) lists them under
+"springs" in the canonical spring order of `core.lattice`, instead of material labels; its
+"voxels", if given, only say which voxels are "filled" or "empty" (default: all filled).
+
+Anything else is refused with a one-line message that names the field: unknown keys, wrong
+lengths, unknown labels, wrong types, non-finite numbers, out-of-range genes or settings.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import replace
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+
+from core.robot import (
+    GENE_BOUNDS,
+    Actuation,
+    Robot,
+    RobotError,
+    SpringRobot,
+    VoxelRobot,
+    build_mechanics,
+)
+from core.settings import format_validation_error, sim_settings
+
+FORMAT = "softevo.robot/1"
+#: Largest grid side and voxel count a robot file may describe.
+MAX_SIDE = 32
+MAX_VOXELS = 4096
+#: Largest robot file read (bytes).
+MAX_FILE_BYTES = 8 * 1024 * 1024
+
+Side = Annotated[int, Field(strict=True, ge=1, le=MAX_SIDE)]
+Label = Literal["empty", "soft", "hard", "sine", "neg_sine"]
+Occupancy = Literal["empty", "filled"]
+Number = Annotated[float, Field(strict=True, allow_inf_nan=False)]
+SpringRow = Annotated[list[Number], Field(min_length=4, max_length=4)]
+
+
+class RobotFileError(ValueError):
+    """A robot file that cannot be read; the message is one line and names the field."""
+
+
+def _gene(name: str) -> Any:
+    low, high = GENE_BOUNDS[name]
+    return Field(0.0, ge=low, le=high, allow_inf_nan=False)
+
+
+class _ActuationModel(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True)
+    a: float = _gene("a")
+    b: float = _gene("b")
+    c: float = _gene("c")
+
+
+class _SpringOption(BaseModel):
+    """[k, b, w, c]: stiffness (N/m), relative amplitude, angular frequency (rad/s), phase (rad)."""
+
+    k: Annotated[float, Field(ge=0, le=1e8, allow_inf_nan=False)]
+    b: Annotated[float, Field(ge=-0.9, le=0.9, allow_inf_nan=False)]
+    w: Annotated[float, Field(ge=0, le=1e4, allow_inf_nan=False)]
+    c: Number
+
+
+class _RobotModel(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    format: Literal["softevo.robot/1"]
+    shape: Annotated[list[Side], Field(min_length=3, max_length=3)]
+    voxels: list[str] | None = Field(None, max_length=MAX_VOXELS)
+    springs: list[SpringRow] | None = Field(None, max_length=28 * MAX_VOXELS)
+    actuation: _ActuationModel | None = None
+    sim: dict[str, Any] = Field(default_factory=dict)
+
+    @field_validator("shape")
+    @classmethod
+    def _not_too_many(cls, shape: list[int]) -> list[int]:
+        if math.prod(shape) > MAX_VOXELS:
+            raise ValueError(f"{math.prod(shape)} voxels, more than the limit of {MAX_VOXELS}")
+        return shape
+
+
+def _refuse(field: str, message: str) -> RobotFileError:
+    return RobotFileError(f"{field}: {message}")
+
+
+def _check_labels(voxels: list[str], allowed: tuple[str, ...]) -> None:
+    for index, label in enumerate(voxels):
+        if label not in allowed:
+            raise _refuse(
+                f"voxels.{index}", f"unknown label {label!r} (expected one of {', '.join(allowed)})"
+            )
+
+
+def parse_robot(data: Any) -> Robot:
+    """Validate a decoded robot file and build the robot it describes."""
+    if not isinstance(data, dict):
+        raise RobotFileError(f"robot file: expected a JSON object, got {type(data).__name__}")
+    if "format" in data and data["format"] != FORMAT:
+        raise _refuse("format", f"expected {FORMAT!r}, got {data['format']!r}")
+    try:
+        model = _RobotModel.model_validate(data)
+    except ValidationError as error:
+        raise RobotFileError(format_validation_error(error)) from None
+    try:
+        sim = sim_settings(model.sim)
+    except ValidationError as error:
+        raise RobotFileError(format_validation_error(error, prefix="sim")) from None
+    n_voxels = math.prod(model.shape)
+    if model.voxels is not None and len(model.voxels) != n_voxels:
+        raise _refuse(
+            "voxels",
+            f"expected {n_voxels} labels for shape {list(model.shape)}, got {len(model.voxels)}",
+        )
+    try:
+        if model.springs is None:
+            if model.voxels is None:
+                raise _refuse("voxels", "required (or give per-spring parameters in 'springs')")
+            _check_labels(model.voxels, ("empty", "soft", "hard", "sine", "neg_sine"))
+            genes = model.actuation or _ActuationModel()
+            robot: Robot = VoxelRobot(
+                shape=(model.shape[0], model.shape[1], model.shape[2]),
+                voxels=tuple(model.voxels),
+                actuation=Actuation(genes.a, genes.b, genes.c),
+                sim=sim,
+            )
+            build_mechanics(robot)  # refuses a grid with no voxel to build
+            return robot
+        if model.actuation is not None:
+            raise _refuse("actuation", "not allowed with 'springs' (each spring has its b, w, c)")
+        voxels = model.voxels or ["filled"] * n_voxels
+        _check_labels(voxels, ("empty", "filled"))
+        springs = np.array(model.springs, dtype=np.float64).reshape(-1, 4)
+        for index, row in enumerate(springs):
+            try:
+                _SpringOption(k=row[0], b=row[1], w=row[2], c=row[3])
+            except ValidationError as error:
+                raise RobotFileError(
+                    format_validation_error(error, prefix=f"springs.{index}")
+                ) from None
+        robot = SpringRobot(
+            shape=(model.shape[0], model.shape[1], model.shape[2]),
+            filled=tuple(label == "filled" for label in voxels),
+            springs=springs,
+            sim=sim,
+        )
+        build_mechanics(robot)  # refuses a spring count that does not match the lattice
+        return robot
+    except RobotError as error:
+        raise RobotFileError(str(error)) from None
+
+
+def load_robot(path: str | Path) -> Robot:
+    """Read and validate a robot file; every failure is a RobotFileError with a one-line reason
+    (without the path, which the caller adds)."""
+    path = Path(path)
+    try:
+        size = path.stat().st_size
+    except OSError as error:
+        raise RobotFileError(f"cannot read ({error.strerror})") from None
+    if size > MAX_FILE_BYTES:
+        raise RobotFileError(f"{size} bytes, more than the limit of {MAX_FILE_BYTES}")
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"), parse_constant=_refuse_constant)
+    except (UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise RobotFileError(f"not valid JSON ({error})") from None
+    except RecursionError:
+        raise RobotFileError("JSON nested too deeply") from None
+    except ValueError as error:
+        raise RobotFileError(str(error)) from None
+    return parse_robot(data)
+
+
+def _refuse_constant(name: str) -> float:
+    raise ValueError(f"non-finite number {name} is not allowed")
+
+
+def robot_to_json(robot: Robot) -> dict[str, Any]:
+    """The robot file of `robot`, with the full simulation settings it is simulated under."""
+    document: dict[str, Any] = {"format": FORMAT, "shape": list(robot.shape)}
+    if isinstance(robot, VoxelRobot):
+        document["voxels"] = list(robot.voxels)
+        genes = robot.actuation
+        document["actuation"] = {"a": genes.a, "b": genes.b, "c": genes.c}
+    else:
+        document["voxels"] = ["filled" if f else "empty" for f in robot.filled]
+        document["springs"] = np.asarray(robot.springs, dtype=np.float64).tolist()
+    document["sim"] = robot.sim.model_dump()
+    return document
+
+
+def dump_robot(robot: Robot, path: str | Path) -> None:
+    """Write `robot` as a robot file (pretty-printed, stable key order)."""
+    Path(path).write_text(json.dumps(robot_to_json(robot), indent=1) + "\n", encoding="utf-8")
+
+
+def with_sim(robot: Robot, **overrides: Any) -> Robot:
+    """A copy of `robot` with some simulation settings changed; bad values raise RobotFileError."""
+    try:
+        return replace(robot, sim=sim_settings(overrides, base=robot.sim))
+    except ValidationError as error:
+        raise RobotFileError(format_validation_error(error, prefix="sim")) from None
+
+
+__all__ = [
+    "FORMAT",
+    "RobotFileError",
+    "dump_robot",
+    "load_robot",
+    "parse_robot",
+    "robot_to_json",
+    "with_sim",
+]

@@ -1,0 +1,102 @@
+"""The `softevo` command as a user runs it: a real subprocess, real files, its output parsed."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from core.robot_file import load_robot
+
+
+def softevo(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "softevo.cli", *args],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=300,
+        check=False,
+    )
+
+
+def test_help_lists_simulate() -> None:
+    done = softevo("--help")
+    assert done.returncode == 0
+    assert "simulate" in done.stdout
+    assert softevo("simulate", "--help").returncode == 0
+
+
+def test_simulate_prints_result_and_writes_trajectory(examples: Path, tmp_path: Path) -> None:
+    trajectory_path = tmp_path / "trajectory.json"
+    done = softevo(
+        "simulate",
+        str(examples / "paper_cube.json"),
+        "--duration",
+        "2",
+        "--trajectory",
+        str(trajectory_path),
+        "--fps",
+        "10",
+    )
+    assert done.returncode == 0, done.stderr
+    result = json.loads(done.stdout)
+    assert set(result) >= {
+        "masses",
+        "springs",
+        "steps",
+        "com_start",
+        "com_end",
+        "distance",
+        "speed",
+        "wall_seconds",
+    }
+    assert (result["masses"], result["springs"], result["steps"]) == (8, 28, 4000)
+    settle = load_robot(examples / "paper_cube.json").sim.settle_time
+    assert result["speed"] == pytest.approx(result["distance"] / (2.0 - settle))
+    trajectory = json.loads(trajectory_path.read_text())
+    assert trajectory["format"] == "softevo.trajectory/1"
+    assert len(trajectory["frames"]) == len(trajectory["times"]) == 21  # 0, 0.1, ..., 2.0 s
+    assert len(trajectory["frames"][0]) == 8 and len(trajectory["springs"]) == 28
+    assert trajectory["times"][-1] == pytest.approx(2.0)
+
+
+def test_example_crawler_crawls(examples: Path) -> None:
+    done = softevo("simulate", str(examples / "crawler_4x4x4.json"))
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["speed"] > 0.01
+
+
+@pytest.mark.parametrize(
+    ("content", "words"),
+    [
+        ('{"format": "softevo.robot/1", "shape": [1, 1, 1], "voxels": ["jelly"]}', "voxels.0"),
+        ("{oops", "not valid JSON"),
+        (
+            '{"format": "softevo.robot/1", "shape": [1, 1, 1], "voxels": ["hard"],'
+            ' "sim": {"dt": -1}}',
+            "sim.dt",
+        ),
+    ],
+)
+def test_bad_file_exits_nonzero_with_one_line(tmp_path: Path, content: str, words: str) -> None:
+    path = tmp_path / "bad.json"
+    path.write_text(content)
+    done = softevo("simulate", str(path))
+    assert done.returncode == 1
+    assert done.stdout == ""
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1, done.stderr
+    assert lines[0].startswith(f"softevo simulate: error: {path}: ")
+    assert words in lines[0]
+
+
+def test_bad_arguments_exit_nonzero(examples: Path, tmp_path: Path) -> None:
+    done = softevo("simulate", str(examples / "paper_cube.json"), "--duration", "-1")
+    assert done.returncode == 2 and "--duration" in done.stderr
+    done = softevo("simulate", str(tmp_path / "missing.json"))
+    assert done.returncode == 1 and "cannot read" in done.stderr
+    assert softevo("fly").returncode == 2
