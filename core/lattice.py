@@ -136,3 +136,20 @@ def build_lattice(filled: np.ndarray, shape: tuple[int, int, int]) -> Lattice:
         spring_lengths=spring_lengths,
         spring_voxels=spring_voxels.astype(np.int64),
     )
+
+
+def spring_point_keys(lattice: Lattice) -> np.ndarray:
+    """One int key per spring, from its two lattice points; sorted, like the springs themselves.
+
+    Keys of the same spring agree between lattices of the same grid shape, so they map the springs
+    of any robot onto the springs of the full (all voxels filled) lattice.
+    """
+    nx, ny, nz = lattice.shape
+    n_points = (nx + 1) * (ny + 1) * (nz + 1)
+    points = lattice.points[lattice.springs]
+    return points[:, 0] * n_points + points[:, 1]
+
+
+def full_lattice(shape: tuple[int, int, int]) -> Lattice:
+    """The lattice of the grid with every voxel filled."""
+    return build_lattice(np.ones(shape[0] * shape[1] * shape[2], dtype=bool), shape)

@@ -20,7 +20,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from core.lattice import Lattice, LatticeError, build_lattice
+from core.lattice import (
+    Lattice,
+    LatticeError,
+    build_lattice,
+    full_lattice,
+    spring_point_keys,
+)
 from core.settings import SimSettings
 
 LABELS = ("empty", "soft", "hard", "sine", "neg_sine")
@@ -66,7 +72,28 @@ class SpringRobot:
     sim: SimSettings = field(default_factory=SimSettings)
 
 
-Robot = VoxelRobot | SpringRobot
+@dataclass(frozen=True, eq=False)
+class LabelledSpringRobot:
+    """A voxel morphology whose every spring has its own material label (softevo's `spring`
+    encoding: modules are single springs, not whole cubes).
+
+    `filled` marks the voxels of the morphology. `spring_labels` gives one label of
+    `SPRING_LABELS` to every spring of the *full* grid lattice (all voxels filled), in canonical
+    order, so a genome's genes keep their place whatever the morphology; springs outside the built
+    lattice are not expressed. A label gives its spring the material of a voxel with that label,
+    without merging: the spring is a module of its own.
+    """
+
+    shape: tuple[int, int, int]
+    filled: tuple[bool, ...]
+    spring_labels: tuple[str, ...]
+    actuation: Actuation = Actuation()
+    sim: SimSettings = field(default_factory=SimSettings)
+
+
+SPRING_LABELS = ("soft", "hard", "sine", "neg_sine")
+
+Robot = VoxelRobot | SpringRobot | LabelledSpringRobot
 
 
 @dataclass(frozen=True, eq=False)
@@ -101,9 +128,10 @@ def _initial_positions(lattice: Lattice, sim: SimSettings) -> np.ndarray:
     return positions
 
 
-def _voxel_materials(robot: VoxelRobot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per-voxel stiffness (N/m), relative rest offset and signed relative amplitude."""
-    sim, genes = robot.sim, robot.actuation
+def _label_materials(
+    labels: tuple[str, ...], sim: SimSettings, genes: Actuation
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per-label stiffness (N/m), relative rest offset and signed relative amplitude."""
     table = {
         "empty": (0.0, 0.0, 0.0),
         "soft": (sim.soft_stiffness, 0.0, 0.0),
@@ -115,7 +143,7 @@ def _voxel_materials(robot: VoxelRobot) -> tuple[np.ndarray, np.ndarray, np.ndar
             -sim.amplitude_scale * genes.b,
         ),
     }
-    rows = np.array([table[label] for label in robot.voxels], dtype=np.float64)
+    rows = np.array([table[label] for label in labels], dtype=np.float64).reshape(-1, 3)
     return rows[:, 0], rows[:, 1], rows[:, 2]
 
 
@@ -128,7 +156,7 @@ def _voxel_mechanics(robot: VoxelRobot) -> Mechanics:
         lattice = build_lattice(filled, robot.shape)
     except LatticeError as error:
         raise RobotError(f"voxels: {error}") from None
-    voxel_k, voxel_offset, voxel_amp = _voxel_materials(robot)
+    voxel_k, voxel_offset, voxel_amp = _label_materials(robot.voxels, robot.sim, robot.actuation)
     spring, voxel = lattice.spring_voxels.T
     keep = lattice.kept[voxel]
     spring, voxel = spring[keep], voxel[keep]
@@ -137,19 +165,55 @@ def _voxel_mechanics(robot: VoxelRobot) -> Mechanics:
     weighted_offset = np.bincount(spring, weights=voxel_k[voxel] * voxel_offset[voxel], minlength=n)
     weighted_amp = np.bincount(spring, weights=voxel_k[voxel] * voxel_amp[voxel], minlength=n)
     safe_k = np.where(k > 0, k, 1.0)
-    length = lattice.spring_lengths * robot.sim.edge_length
-    amplitude = length * (weighted_amp / safe_k)
-    c = robot.actuation.c
+    return _labelled_mechanics(
+        lattice, k, weighted_offset / safe_k, weighted_amp / safe_k, robot.actuation, robot.sim
+    )
+
+
+def _labelled_mechanics(
+    lattice: Lattice,
+    k: np.ndarray,
+    offset: np.ndarray,
+    amplitude: np.ndarray,
+    genes: Actuation,
+    sim: SimSettings,
+) -> Mechanics:
+    """Mechanics from per-spring stiffness, relative offset and relative amplitude (phase c)."""
+    length = lattice.spring_lengths * sim.edge_length
+    amplitude = length * amplitude
     return Mechanics(
         lattice=lattice,
-        positions=_initial_positions(lattice, robot.sim),
+        positions=_initial_positions(lattice, sim),
         stiffness=k,
-        rest_length=length * (1.0 + weighted_offset / safe_k),
-        amp_sin=amplitude * math.cos(c),
-        amp_cos=amplitude * math.sin(c),
-        omega=robot.sim.omega if np.any(amplitude != 0) else 0.0,
-        sim=robot.sim,
+        rest_length=length * (1.0 + offset),
+        amp_sin=amplitude * math.cos(genes.c),
+        amp_cos=amplitude * math.sin(genes.c),
+        omega=sim.omega if np.any(amplitude != 0) else 0.0,
+        sim=sim,
     )
+
+
+def _labelled_spring_mechanics(robot: LabelledSpringRobot) -> Mechanics:
+    full = full_lattice(robot.shape)
+    if len(robot.spring_labels) != full.n_springs:
+        raise RobotError(
+            f"spring_labels: expected {full.n_springs} labels (the springs of the full "
+            f"{'x'.join(map(str, robot.shape))} lattice), got {len(robot.spring_labels)}"
+        )
+    for index, label in enumerate(robot.spring_labels):
+        if label not in SPRING_LABELS:
+            raise RobotError(
+                f"spring_labels.{index}: unknown label {label!r} "
+                f"(expected one of {', '.join(SPRING_LABELS)})"
+            )
+    try:
+        lattice = build_lattice(np.array(robot.filled, dtype=bool), robot.shape)
+    except LatticeError as error:
+        raise RobotError(f"voxels: {error}") from None
+    expressed = np.searchsorted(spring_point_keys(full), spring_point_keys(lattice))
+    labels = tuple(robot.spring_labels[i] for i in expressed)
+    k, offset, amplitude = _label_materials(labels, robot.sim, robot.actuation)
+    return _labelled_mechanics(lattice, k, offset, amplitude, robot.actuation, robot.sim)
 
 
 def _spring_mechanics(robot: SpringRobot) -> Mechanics:
@@ -188,4 +252,6 @@ def build_mechanics(robot: Robot) -> Mechanics:
         return _voxel_mechanics(robot)
     if isinstance(robot, SpringRobot):
         return _spring_mechanics(robot)
+    if isinstance(robot, LabelledSpringRobot):
+        return _labelled_spring_mechanics(robot)
     raise TypeError(f"not a robot: {type(robot).__name__}")

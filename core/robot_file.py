@@ -7,8 +7,10 @@
      "sim": {"dt": .., ...}}                 # overrides of the default SimSettings
 
 A robot whose springs carry their own [k, b, w, c] (the paper's phase 2 cube) lists them under
-"springs" in the canonical spring order of `core.lattice`, instead of material labels; its
-"voxels", if given, only say which voxels are "filled" or "empty" (default: all filled).
+"springs" in the canonical spring order of `core.lattice`, instead of material labels. A robot of
+the `spring` encoding gives "spring_labels": one of soft, hard, sine, neg_sine for every spring of
+the full grid lattice (all voxels filled), with "actuation" genes. For both, "voxels", if given,
+only say which voxels are "filled" or "empty" (default: all filled).
 
 Anything else is refused with a one-line message that names the field: unknown keys, wrong
 lengths, unknown labels, wrong types, non-finite numbers, out-of-range genes or settings.
@@ -28,6 +30,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from core.robot import (
     GENE_BOUNDS,
     Actuation,
+    LabelledSpringRobot,
     Robot,
     RobotError,
     SpringRobot,
@@ -82,6 +85,7 @@ class _RobotModel(BaseModel):
     shape: Annotated[list[Side], Field(min_length=3, max_length=3)]
     voxels: list[str] | None = Field(None, max_length=MAX_VOXELS)
     springs: list[SpringRow] | None = Field(None, max_length=28 * MAX_VOXELS)
+    spring_labels: list[str] | None = Field(None, max_length=28 * MAX_VOXELS)
     actuation: _ActuationModel | None = None
     sim: dict[str, Any] = Field(default_factory=dict)
 
@@ -105,6 +109,13 @@ def _check_labels(voxels: list[str], allowed: tuple[str, ...]) -> None:
             )
 
 
+def _occupancy(voxels: list[str] | None, n_voxels: int) -> tuple[bool, ...]:
+    """Filled voxels of a robot whose springs carry their own materials (default: all)."""
+    labels = voxels if voxels is not None else ["filled"] * n_voxels
+    _check_labels(labels, ("empty", "filled"))
+    return tuple(label == "filled" for label in labels)
+
+
 def parse_robot(data: Any) -> Robot:
     """Validate a decoded robot file and build the robot it describes."""
     if not isinstance(data, dict):
@@ -125,7 +136,20 @@ def parse_robot(data: Any) -> Robot:
             "voxels",
             f"expected {n_voxels} labels for shape {list(model.shape)}, got {len(model.voxels)}",
         )
+    if model.springs is not None and model.spring_labels is not None:
+        raise _refuse("spring_labels", "give either 'springs' or 'spring_labels', not both")
     try:
+        if model.spring_labels is not None:
+            genes = model.actuation or _ActuationModel()
+            robot = LabelledSpringRobot(
+                shape=(model.shape[0], model.shape[1], model.shape[2]),
+                filled=_occupancy(model.voxels, n_voxels),
+                spring_labels=tuple(model.spring_labels),
+                actuation=Actuation(genes.a, genes.b, genes.c),
+                sim=sim,
+            )
+            build_mechanics(robot)  # refuses unknown labels and a wrong count
+            return robot
         if model.springs is None:
             if model.voxels is None:
                 raise _refuse("voxels", "required (or give per-spring parameters in 'springs')")
@@ -141,8 +165,7 @@ def parse_robot(data: Any) -> Robot:
             return robot
         if model.actuation is not None:
             raise _refuse("actuation", "not allowed with 'springs' (each spring has its b, w, c)")
-        voxels = model.voxels or ["filled"] * n_voxels
-        _check_labels(voxels, ("empty", "filled"))
+        filled = _occupancy(model.voxels, n_voxels)
         springs = np.array(model.springs, dtype=np.float64).reshape(-1, 4)
         for index, row in enumerate(springs):
             try:
@@ -153,7 +176,7 @@ def parse_robot(data: Any) -> Robot:
                 ) from None
         robot = SpringRobot(
             shape=(model.shape[0], model.shape[1], model.shape[2]),
-            filled=tuple(label == "filled" for label in voxels),
+            filled=filled,
             springs=springs,
             sim=sim,
         )
@@ -193,6 +216,11 @@ def robot_to_json(robot: Robot) -> dict[str, Any]:
     document: dict[str, Any] = {"format": FORMAT, "shape": list(robot.shape)}
     if isinstance(robot, VoxelRobot):
         document["voxels"] = list(robot.voxels)
+        genes = robot.actuation
+        document["actuation"] = {"a": genes.a, "b": genes.b, "c": genes.c}
+    elif isinstance(robot, LabelledSpringRobot):
+        document["voxels"] = ["filled" if f else "empty" for f in robot.filled]
+        document["spring_labels"] = list(robot.spring_labels)
         genes = robot.actuation
         document["actuation"] = {"a": genes.a, "b": genes.b, "c": genes.c}
     else:

@@ -59,12 +59,13 @@ class SimSettings(BaseModel):
     def _check_times(self) -> SimSettings:
         if self.settle_time >= self.duration:
             raise ValueError(
-                f"settle_time ({self.settle_time} s) must be shorter than duration "
+                f"settle_time: {self.settle_time} s must be shorter than duration "
                 f"({self.duration} s)"
             )
         if self.n_steps > MAX_STEPS:
             raise ValueError(
-                f"duration / dt = {self.n_steps} steps, more than the limit of {MAX_STEPS}"
+                f"duration: duration / dt = {self.n_steps} steps, more than the limit of "
+                f"{MAX_STEPS}"
             )
         return self
 
@@ -100,7 +101,9 @@ def format_validation_error(error: ValidationError, prefix: str = "") -> str:
     message = first["msg"].removeprefix("Value error, ")
     more = len(error.errors()) - 1
     suffix = f" (and {more} more problem{'s' if more > 1 else ''})" if more else ""
-    return f"{location or 'value'}: {message}{suffix}"
+    if not location:  # a model-level check: its message starts with the field it is about
+        return f"{message}{suffix}"
+    return f"{location}: {message}{suffix}"
 
 
 def is_finite_number(value: object) -> bool:

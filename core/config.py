@@ -1,0 +1,161 @@
+"""Run configurations and presets.
+
+A run is asked for as a preset name plus any setting to override, e.g.
+`{"preset": "paper-voxel", "seed": 1, "shape": [5, 5, 3], "sim": {"duration": 5}}`; `resolve`
+merges the two (simulation settings key by key) and validates the result, naming the field of
+any bad value, before anything runs.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Literal
+
+from pydantic import Field, ValidationError, field_validator, model_validator
+
+from core.encodings import PAPER_CUBE_OPTIONS, Encoding, make_encoding
+from core.ga.algorithm import GAConfig
+from core.settings import SimSettings, format_validation_error
+
+#: Largest bounding-box side and voxel count of a run.
+MAX_SIDE = 16
+MAX_VOXELS = 1000
+CubeOption = tuple[float, float, float, float]
+
+
+class ConfigError(ValueError):
+    """A run configuration that cannot run; the message names the field."""
+
+
+class RunConfig(GAConfig):
+    """Everything that defines a run: encoding, bounding box, seed, GA and simulation settings."""
+
+    preset: str | None = None
+    encoding: Literal["voxel", "cube-springs", "spring"] = "voxel"
+    shape: tuple[int, int, int] = (4, 4, 4)
+    seed: int = Field(0, ge=0, le=2**63 - 1)
+    sim: SimSettings = Field(default_factory=SimSettings)
+    cube_options: tuple[CubeOption, ...] = PAPER_CUBE_OPTIONS
+
+    @field_validator("shape", mode="before")
+    @classmethod
+    def _shape(cls, value: Any) -> tuple[int, int, int]:
+        if isinstance(value, str):  # "5x5x3", as the CLI takes it
+            try:
+                value = [int(part) for part in value.lower().split("x")]
+            except ValueError:
+                raise ValueError(f"expected NXxNYxNZ like 5x5x3, got {value!r}") from None
+        if not isinstance(value, list | tuple) or len(value) != 3:
+            raise ValueError(f"expected three sides [nx, ny, nz], got {value!r}")
+        if not all(isinstance(v, int) and not isinstance(v, bool) for v in value):
+            raise ValueError(f"sides must be integers, got {value!r}")
+        if not all(1 <= v <= MAX_SIDE for v in value):
+            raise ValueError(f"each side must be between 1 and {MAX_SIDE}, got {list(value)}")
+        if math.prod(value) > MAX_VOXELS:
+            raise ValueError(f"{math.prod(value)} voxels, more than the limit of {MAX_VOXELS}")
+        return (value[0], value[1], value[2])
+
+    @field_validator("cube_options", mode="before")
+    @classmethod
+    def _options(cls, value: Any) -> Any:
+        if isinstance(value, list):
+            return tuple(tuple(row) if isinstance(row, list) else row for row in value)
+        return value
+
+    @model_validator(mode="after")
+    def _consistent(self) -> RunConfig:
+        if self.encoding == "cube-springs" and self.shape != (1, 1, 1):
+            raise ValueError(
+                "shape: the cube-springs encoding is one cube, shape must be 1x1x1, got "
+                + "x".join(map(str, self.shape))
+            )
+        if self.encoding == "cube-springs" and len(self.cube_options) < 2:
+            raise ValueError("cube_options: at least two options are needed to evolve")
+        omegas = {w for _, b, w, _ in self.cube_options if b != 0}
+        if self.encoding == "cube-springs" and len(omegas) > 1:
+            raise ValueError(f"cube_options: actuated options must share one w, got {omegas}")
+        return self
+
+    def make_encoding(self) -> Encoding:
+        return make_encoding(self.encoding, self.shape, self.cube_options)
+
+    def ga_config(self) -> GAConfig:
+        return GAConfig.model_validate(
+            {name: getattr(self, name) for name in GAConfig.model_fields}
+        )
+
+    def to_json(self) -> dict[str, Any]:
+        return self.model_dump(mode="json")
+
+
+#: Each preset is a partial RunConfig; unspecified fields take RunConfig's defaults.
+PRESETS: dict[str, dict[str, Any]] = {
+    "paper-cube": {
+        "encoding": "cube-springs",
+        "shape": [1, 1, 1],
+        "population": 30,
+        "generations": 1000,
+        "selection": "grouped",
+        "groups": 3,
+        "survival": 0.2,
+        "crossover_probability": 24 / 30,
+        "mutation_probability": 0.2,
+        "mutation_genes": 2,
+        "immigrants": 0.0,
+    },
+    "paper-voxel": {
+        "encoding": "voxel",
+        "shape": [4, 4, 4],
+        "population": 25,
+        "generations": 100,
+        "selection": "grouped",
+        "groups": 5,
+        "survival": 0.5,
+        "crossover_probability": 1.0,
+        "mutation_probability": 0.02,
+        "mutation_genes": 2,
+        "immigrants": 0.12,
+    },
+    "quick": {
+        "encoding": "voxel",
+        "shape": [3, 3, 3],
+        "population": 16,
+        "generations": 10,
+        "selection": "grouped",
+        "groups": 4,
+        "survival": 0.5,
+        "crossover_probability": 1.0,
+        "mutation_probability": 0.5,
+        "mutation_genes": 2,
+        "immigrants": 0.125,
+        "sim": {"duration": 3.0, "settle_time": 0.5},
+    },
+}
+
+PRESET_DESCRIPTIONS = {
+    "paper-cube": "paper phase 2: one cube, 28 springs pick one of 4 [k,b,w,c] options",
+    "paper-voxel": "paper phase 3: voxel robots in a bounding box (4x4x4 by default)",
+    "quick": "a small voxel run for demos and tests (3x3x3, 16 x 10 generations, 3 s)",
+}
+
+
+def resolve(request: dict[str, Any]) -> RunConfig:
+    """Merge a preset with overrides and validate; ConfigError names the offending field."""
+    if not isinstance(request, dict):
+        raise ConfigError(f"run config: expected an object, got {type(request).__name__}")
+    preset = request.get("preset", "paper-voxel")
+    if preset not in PRESETS:
+        raise ConfigError(f"preset: unknown preset {preset!r} (known: {', '.join(PRESETS)})")
+    merged = {**PRESETS[preset], **request, "preset": preset}
+    sim_overrides = request.get("sim", {})
+    if not isinstance(sim_overrides, dict):
+        raise ConfigError("sim: expected an object of simulation settings")
+    merged["sim"] = {
+        **SimSettings().model_dump(),
+        **PRESETS[preset].get("sim", {}),
+        **sim_overrides,
+    }
+    try:
+        return RunConfig.model_validate(merged)
+    except ValidationError as error:
+        raise ConfigError(format_validation_error(error)) from None

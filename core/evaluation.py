@@ -1,0 +1,117 @@
+"""Evaluators: one narrow interface, `evaluate(robot_files) -> fitness array`, several backends.
+
+The genetic algorithm and the coordinator only see `Evaluator`; whether robots are simulated in
+this process, in a local process pool or (later) by RQ workers is the backend's business. Payloads
+are plain data (robot-file dicts, `softevo.robot/1`), never live objects, and a robot's fitness
+does not depend on which batch, process or machine simulated it (the kernels are bit-identical
+across batches), so every backend gives the same learning curve.
+
+A robot that cannot be built or whose simulation blows up has fitness NaN: failed, never 0.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import multiprocessing
+import os
+from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor
+from typing import Any, Protocol
+
+import numpy as np
+
+from core.physics import simulate, simulate_batch
+from core.robot import Robot, VoxelRobot
+from core.robot_file import RobotFileError, parse_robot
+from core.settings import sim_settings
+
+
+class Evaluator(Protocol):
+    """Simulates a batch of robots that share one simulation setting; returns speeds (m/s)."""
+
+    def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray: ...
+
+    def close(self) -> None: ...
+
+
+def evaluate_robot_files(robot_files: Sequence[dict[str, Any]]) -> list[float | None]:
+    """The job function: robot files in, speeds out (None for a failed robot, JSON-safe)."""
+    robots: list[Robot | None] = []
+    for document in robot_files:
+        try:
+            robots.append(parse_robot(document))
+        except RobotFileError:
+            robots.append(None)
+    built = [robot for robot in robots if robot is not None]
+    speeds = iter(result.speed for result in simulate_batch(built)) if built else iter(())
+    return [None if robot is None else _finite_or_none(next(speeds)) for robot in robots]
+
+
+def _finite_or_none(value: float) -> float | None:
+    return value if math.isfinite(value) else None
+
+
+def _to_array(values: Sequence[float | None]) -> np.ndarray:
+    return np.array([math.nan if v is None else v for v in values], dtype=np.float64)
+
+
+class SerialEvaluator:
+    """Everything in the calling process, one batch."""
+
+    def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray:
+        return _to_array(evaluate_robot_files(list(robot_files)))
+
+    def close(self) -> None:
+        pass
+
+
+def warm_up() -> None:
+    """Load (or compile) the physics kernels, so no evaluation pays for it."""
+    robot = VoxelRobot((1, 1, 1), ("hard",), sim=sim_settings({"duration": 0.01, "settle_time": 0}))
+    simulate_batch([robot])
+    simulate(robot)
+
+
+class PoolEvaluator:
+    """A local pool of worker processes (default: one per core), each warmed up once.
+
+    A batch is cut into contiguous chunks, about two per process so a slow chunk does not leave
+    a core idle; results come back in input order.
+    """
+
+    def __init__(self, processes: int | None = None) -> None:
+        self.processes = processes or os.cpu_count() or 1
+        if self.processes < 1:
+            raise ValueError(f"processes must be >= 1, got {self.processes}")
+        self._pool = ProcessPoolExecutor(
+            max_workers=self.processes,
+            mp_context=multiprocessing.get_context("spawn"),
+            initializer=warm_up,
+        )
+
+    def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray:
+        files = list(robot_files)
+        if not files:
+            return np.empty(0)
+        n_chunks = min(len(files), 2 * self.processes)
+        bounds = np.linspace(0, len(files), n_chunks + 1).round().astype(int)
+        chunks = [files[start:stop] for start, stop in itertools.pairwise(bounds)]
+        results = self._pool.map(evaluate_robot_files, chunks)
+        return _to_array([value for chunk in results for value in chunk])
+
+    def close(self) -> None:
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+    def __enter__(self) -> PoolEvaluator:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def make_evaluator(processes: int | None = None) -> Evaluator:
+    """The in-process default: serial for one process, otherwise a local pool."""
+    if processes == 1:
+        return SerialEvaluator()
+    return PoolEvaluator(processes)

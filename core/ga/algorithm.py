@@ -1,0 +1,271 @@
+"""The genetic algorithm as ask/tell on explicit state.
+
+`ask()` gives the current generation's individuals, `tell(fitness)` takes their fitness (NaN for a
+failed evaluation) and moves on. Generation g is bred from generation g-1 and its fitness with a
+generator seeded by (seed, g) alone, so it can be regenerated exactly from the run's seed and the
+stored population of g-1, and the whole state round-trips through JSON.
+
+One generation (g > 0), with P the population size:
+
+1. Survivors: `grouped` selection keeps the best `survival` fraction of each of `groups` random
+   groups (the paper); `tournament` and `roulette` keep only the best individual, if `elitism`.
+2. Immigrants: round(`immigrants` * P) new random genomes.
+3. Children fill the rest, in pairs: two parents (uniform among the survivors for `grouped`, by
+   tournament or roulette wheel otherwise); with probability `crossover_probability` a two-point
+   crossover of each gene segment, else copies; each child is mutated with probability
+   `mutation_probability` (`mutation_genes` discrete genes redrawn to new values, real genes a
+   bounded Gaussian step of `mutation_sigma` times their range).
+4. With `elitism`, the best individual of g-1 is always among the survivors, so best-so-far never
+   falls. (Grouped truncation keeps each group's best, hence always the overall best.)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from core.encodings import Encoding
+from core.ga import operators
+from core.ga.stats import GenerationStats, generation_stats
+from core.genome import Genome
+
+
+class GAConfig(BaseModel):
+    """Every setting of the genetic algorithm; defaults are the paper's phase 3 (`paper-voxel`)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
+
+    population: int = Field(25, ge=2, le=10_000)
+    generations: int = Field(100, ge=1, le=100_000)
+    selection: Literal["grouped", "tournament", "roulette"] = "grouped"
+    groups: int = Field(5, ge=1, le=1000, description="groups of grouped truncation")
+    survival: float = Field(0.5, gt=0, le=1, description="fraction kept per group")
+    tournament_size: int = Field(3, ge=1, le=100)
+    crossover_probability: float = Field(1.0, ge=0, le=1)
+    mutation_probability: float = Field(0.02, ge=0, le=1, description="fraction of children")
+    mutation_genes: int = Field(2, ge=0, le=100_000, description="discrete genes per mutation")
+    mutation_sigma: float = Field(0.1, ge=0, le=10, description="real-gene step / range")
+    immigrants: float = Field(0.12, ge=0, le=1, description="fraction of P, each generation")
+    elitism: bool = True
+
+    @model_validator(mode="after")
+    def _room_for_children(self) -> GAConfig:
+        if self.n_immigrants >= self.population:
+            raise ValueError(
+                f"immigrants: {self.immigrants} of {self.population} leaves no room for "
+                "survivors and children"
+            )
+        return self
+
+    @property
+    def n_immigrants(self) -> int:
+        return math.floor(self.immigrants * self.population + 0.5)
+
+
+@dataclass(frozen=True)
+class Individual:
+    """One member of a generation and where it came from (parents index the previous one)."""
+
+    genome: Genome
+    operator: str  # random | survivor | crossover | copy | immigrant (+ "+mutation")
+    parents: tuple[int, ...] = ()
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "genome": self.genome.to_json(),
+            "operator": self.operator,
+            "parents": list(self.parents),
+        }
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> Individual:
+        return cls(Genome.from_json(data["genome"]), data["operator"], tuple(data["parents"]))
+
+
+def generation_rng(seed: int, generation: int) -> np.random.Generator:
+    """The generator of generation `generation` of a run: a function of the seed and g only."""
+    return np.random.default_rng(np.random.SeedSequence([seed, generation]))
+
+
+@dataclass
+class GAState:
+    """Everything needed to go on: the generation being evaluated and the last one evaluated."""
+
+    seed: int
+    generation: int = 0
+    current: list[Individual] | None = None
+    previous: list[Individual] | None = None
+    previous_fitness: list[float] | None = None
+    best: tuple[Genome, float, int] | None = None  # genome, fitness, generation
+    history: list[GenerationStats] = field(default_factory=list)
+
+    def to_json(self) -> dict[str, Any]:
+        def individuals(items: list[Individual] | None) -> list[dict] | None:
+            return None if items is None else [item.to_json() for item in items]
+
+        return {
+            "seed": self.seed,
+            "generation": self.generation,
+            "current": individuals(self.current),
+            "previous": individuals(self.previous),
+            "previous_fitness": _floats_to_json(self.previous_fitness),
+            "best": None
+            if self.best is None
+            else {
+                "genome": self.best[0].to_json(),
+                "fitness": self.best[1],
+                "generation": self.best[2],
+            },
+            "history": [stats.to_json() for stats in self.history],
+        }
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> GAState:
+        def individuals(items: list[dict] | None) -> list[Individual] | None:
+            return None if items is None else [Individual.from_json(item) for item in items]
+
+        best = data.get("best")
+        return cls(
+            seed=int(data["seed"]),
+            generation=int(data["generation"]),
+            current=individuals(data.get("current")),
+            previous=individuals(data.get("previous")),
+            previous_fitness=_floats_from_json(data.get("previous_fitness")),
+            best=None
+            if best is None
+            else (
+                Genome.from_json(best["genome"]),
+                float(best["fitness"]),
+                int(best["generation"]),
+            ),
+            history=[GenerationStats.from_json(item) for item in data.get("history", [])],
+        )
+
+
+def _floats_to_json(values: list[float] | None) -> list[float | None] | None:
+    return None if values is None else [v if math.isfinite(v) else None for v in values]
+
+
+def _floats_from_json(values: list[float | None] | None) -> list[float] | None:
+    return None if values is None else [math.nan if v is None else float(v) for v in values]
+
+
+class GeneticAlgorithm:
+    """ask()/tell() over a `GAState`; the state is the only thing that changes."""
+
+    def __init__(self, config: GAConfig, encoding: Encoding, state: GAState) -> None:
+        self.config = config
+        self.encoding = encoding
+        self.state = state
+
+    @classmethod
+    def start(cls, config: GAConfig, encoding: Encoding, seed: int) -> GeneticAlgorithm:
+        return cls(config, encoding, GAState(seed=seed))
+
+    @property
+    def done(self) -> bool:
+        return self.state.generation >= self.config.generations
+
+    def ask(self) -> list[Individual]:
+        """The individuals of the current generation (the same list until `tell`)."""
+        if self.done:
+            raise RuntimeError(f"the run has finished its {self.config.generations} generations")
+        if self.state.current is None:
+            self.state.current = self._breed()
+        return list(self.state.current)
+
+    def tell(self, fitness: np.ndarray | list[float], **counts: int) -> GenerationStats:
+        """Record the current generation's fitness (NaN = failed) and advance one generation.
+
+        `counts` (evaluations, saved, failed, ...) are stored with the generation's statistics.
+        """
+        current = self.ask()
+        values = np.asarray(fitness, dtype=np.float64)
+        if values.shape != (len(current),):
+            raise ValueError(f"expected {len(current)} fitness values, got shape {values.shape}")
+        state = self.state
+        finite = np.isfinite(values)
+        if finite.any():
+            index = int(np.nanargmax(np.where(finite, values, -np.inf)))
+            if state.best is None or values[index] > state.best[1]:
+                state.best = (current[index].genome, float(values[index]), state.generation)
+        best_so_far = state.best[1] if state.best is not None else math.nan
+        stats = generation_stats(
+            state.generation,
+            values,
+            [individual.genome for individual in current],
+            best_so_far,
+            **counts,
+        )
+        state.history.append(stats)
+        state.previous, state.previous_fitness = current, values.tolist()
+        state.current = None
+        state.generation += 1
+        return stats
+
+    def _breed(self) -> list[Individual]:
+        config, encoding, state = self.config, self.encoding, self.state
+        rng = generation_rng(state.seed, state.generation)
+        if state.generation == 0 or state.previous is None or state.previous_fitness is None:
+            return [Individual(encoding.random(rng), "random") for _ in range(config.population)]
+        parents = state.previous
+        fitness = np.asarray(state.previous_fitness, dtype=np.float64)
+        if config.selection == "grouped":
+            survivors = operators.grouped_truncation(fitness, config.groups, config.survival, rng)
+        elif config.elitism:
+            survivors = operators.rank_order(fitness)[:1]
+        else:
+            survivors = np.empty(0, dtype=np.int64)
+        survivors = survivors[: config.population - config.n_immigrants]
+        n_children = config.population - len(survivors) - config.n_immigrants
+        n_parents = 2 * math.ceil(n_children / 2)
+        if config.selection == "grouped":
+            mates = survivors[rng.integers(0, len(survivors), size=n_parents)]
+        elif config.selection == "tournament":
+            mates = operators.tournament(fitness, n_parents, config.tournament_size, rng)
+        else:
+            mates = operators.roulette(fitness, n_parents, rng)
+        children: list[Individual] = []
+        for first, second in mates.reshape(-1, 2):
+            children.extend(self._mate(parents[first], parents[second], (first, second), rng))
+        return [
+            *(Individual(parents[i].genome, "survivor", (int(i),)) for i in survivors),
+            *children[:n_children],
+            *(Individual(encoding.random(rng), "immigrant") for _ in range(config.n_immigrants)),
+        ]
+
+    def _mate(
+        self,
+        first: Individual,
+        second: Individual,
+        indices: tuple[int, int],
+        rng: np.random.Generator,
+    ) -> list[Individual]:
+        config, encoding = self.config, self.encoding
+        a, b = np.array(first.genome.discrete), np.array(second.genome.discrete)
+        ra, rb = np.array(first.genome.real), np.array(second.genome.real)
+        operator = "copy"
+        if rng.random() < config.crossover_probability:
+            operator = "crossover"
+            for segment in encoding.segments:
+                part = slice(segment.start, segment.stop)
+                a[part], b[part], _ = operators.two_point_crossover(a[part], b[part], rng)
+            ra, rb, _ = operators.two_point_crossover(ra, rb, rng)
+        children = []
+        for k, (discrete, real) in enumerate(((a, ra), (b, rb))):
+            label = operator
+            if rng.random() < config.mutation_probability:
+                label += "+mutation"
+                discrete = operators.mutate_discrete(
+                    discrete, encoding.alphabet, config.mutation_genes, rng
+                )
+                real = operators.mutate_real(real, encoding.real_bounds, config.mutation_sigma, rng)
+            parents = (
+                tuple(int(i) for i in indices) if operator == "crossover" else (int(indices[k]),)
+            )
+            children.append(Individual(encoding.genome(discrete, real), label, parents))
+        return children

@@ -1,0 +1,81 @@
+"""Per-generation statistics: the learning curve's rows.
+
+Diversity is the mean pairwise normalised Hamming distance of the discrete genes: for every pair
+of individuals, the fraction of gene positions where they differ, averaged over all pairs. 0 means
+a population of clones, about 1 - 1/alphabet a uniformly random one. Real genes do not enter it.
+Failed evaluations (NaN) are left out of best/mean/median/min/std and counted in `failed`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from core.genome import Genome
+
+
+@dataclass(frozen=True)
+class GenerationStats:
+    generation: int
+    best: float
+    mean: float
+    median: float
+    min: float
+    std: float
+    best_so_far: float
+    diversity: float
+    size: int
+    failed: int
+    evaluations: int = 0  # simulations run for this generation
+    saved: int = 0  # individuals whose fitness came from the cache
+
+    def to_json(self) -> dict[str, Any]:
+        return {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+                for k, v in asdict(self).items()}  # fmt: skip
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> GenerationStats:
+        values = {k: (math.nan if v is None else v) for k, v in data.items()}
+        return cls(**values)
+
+
+def diversity(genomes: list[Genome]) -> float:
+    """Mean pairwise normalised Hamming distance of the discrete genes (0 for fewer than 2)."""
+    if len(genomes) < 2 or not genomes[0].discrete:
+        return 0.0
+    genes = np.array([g.discrete for g in genomes])
+    n, length = genes.shape
+    differing = 0
+    for position in range(length):  # pairs that differ at this position, from value counts
+        counts = np.unique(genes[:, position], return_counts=True)[1]
+        differing += (n * n - int((counts * counts).sum())) // 2
+    return differing / (length * n * (n - 1) / 2)
+
+
+def generation_stats(
+    generation: int,
+    fitness: np.ndarray,
+    genomes: list[Genome],
+    best_so_far: float,
+    evaluations: int = 0,
+    saved: int = 0,
+) -> GenerationStats:
+    finite = fitness[np.isfinite(fitness)]
+    has = len(finite) > 0
+    return GenerationStats(
+        generation=generation,
+        best=float(finite.max()) if has else math.nan,
+        mean=float(finite.mean()) if has else math.nan,
+        median=float(np.median(finite)) if has else math.nan,
+        min=float(finite.min()) if has else math.nan,
+        std=float(finite.std()) if has else math.nan,
+        best_so_far=best_so_far,
+        diversity=diversity(genomes),
+        size=len(fitness),
+        failed=int(len(fitness) - len(finite)),
+        evaluations=evaluations,
+        saved=saved,
+    )

@@ -1,0 +1,42 @@
+"""Genomes: the plain data the genetic algorithm breeds, with a stable hash.
+
+A genome is a list of discrete genes (small integers, each with its own alphabet size) and a list
+of real genes (each with bounds). What the genes mean is the encoding's business
+(`core.encodings`); the operators in `core.ga.operators` only see integers and floats.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass
+from typing import Any
+
+
+@dataclass(frozen=True)
+class Genome:
+    """One individual's genes. `encoding` names how they become a robot."""
+
+    encoding: str
+    discrete: tuple[int, ...]
+    real: tuple[float, ...] = ()
+
+    def to_json(self) -> dict[str, Any]:
+        return {"encoding": self.encoding, "discrete": list(self.discrete), "real": list(self.real)}
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> Genome:
+        return cls(
+            encoding=str(data["encoding"]),
+            discrete=tuple(int(g) for g in data["discrete"]),
+            real=tuple(float(g) for g in data.get("real", ())),
+        )
+
+    @property
+    def hash(self) -> str:
+        """Stable across processes and machines: sha256 of the canonical JSON, 16 hex digits.
+
+        Real genes enter as their shortest round-trip repr, so equal floats hash equally.
+        """
+        canonical = json.dumps(self.to_json(), separators=(",", ":"), sort_keys=True)
+        return hashlib.sha256(canonical.encode()).hexdigest()[:16]
