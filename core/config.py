@@ -120,7 +120,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         "encoding": "voxel",
         "shape": [3, 3, 3],
         "population": 16,
-        "generations": 10,
+        "generations": 20,
         "selection": "grouped",
         "groups": 4,
         "survival": 0.5,
@@ -135,7 +135,7 @@ PRESETS: dict[str, dict[str, Any]] = {
 PRESET_DESCRIPTIONS = {
     "paper-cube": "paper phase 2: one cube, 28 springs pick one of 4 [k,b,w,c] options",
     "paper-voxel": "paper phase 3: voxel robots in a bounding box (4x4x4 by default)",
-    "quick": "a small voxel run for demos and tests (3x3x3, 16 x 10 generations, 3 s)",
+    "quick": "a small voxel run for demos and tests (3x3x3, 16 x 20 generations, 3 s)",
 }
 
 

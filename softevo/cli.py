@@ -12,8 +12,9 @@ import math
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import NoReturn
 
-from softevo import __version__
+from softevo import __version__, run_command
 
 
 class CommandError(Exception):
@@ -51,12 +52,20 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0 if result.stable else 1
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse, but a usage error is one line (the full usage is in --help), exit code 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="softevo", description="Evolve modular soft crawling robots."
-    )
+    parser = Parser(prog="softevo", description="Evolve modular soft crawling robots.")
     parser.add_argument("--version", action="version", version=f"softevo {__version__}")
-    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    commands = parser.add_subparsers(
+        dest="command", required=True, metavar="COMMAND", parser_class=Parser
+    )
+    run_command.add_parser(commands)
 
     simulate = commands.add_parser(
         "simulate",
@@ -78,6 +87,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--fps", type=_positive_float, default=30.0, help="trajectory frames per second (30)"
     )
     simulate.set_defaults(handler=_cmd_simulate)
+    for subparser in commands.choices.values():
+        subparser.set_defaults(parser=subparser)
     return parser
 
 

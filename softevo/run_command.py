@@ -1,0 +1,108 @@
+"""`softevo run`: a whole evolution experiment in this process, with a live progress bar."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+from core.config import PRESETS, ConfigError, resolve
+from core.evaluation import make_evaluator
+from core.evolution import Evolution
+from softevo.results import summary, write_results
+
+
+def add_parser(commands: Any) -> None:
+    run = commands.add_parser(
+        "run",
+        help="run a whole evolution experiment in this process",
+        description=(
+            "Evolve robots in this process with a live progress bar. After every generation "
+            "the output folder gets config.json, curve.csv, curve.json, best_robot.json and "
+            "state.json; Ctrl-C stops and keeps them."
+        ),
+    )
+    run.add_argument("--preset", default="quick", choices=sorted(PRESETS), help="(quick)")
+    run.add_argument("--shape", metavar="NXxNYxNZ", help="bounding box, e.g. 5x5x3")
+    run.add_argument("--encoding", choices=["voxel", "cube-springs", "spring"])
+    run.add_argument("--seed", type=int, default=0, help="random seed (0)")
+    run.add_argument("--population", type=int, metavar="P")
+    run.add_argument("--generations", type=int, metavar="G")
+    run.add_argument("--duration", type=float, metavar="S", help="simulated seconds per robot")
+    run.add_argument(
+        "--workers", type=int, metavar="W", help="processes (default: one per core; 1 = serial)"
+    )
+    run.add_argument("--out", metavar="DIR", help="output folder (softevo-runs/PRESET-seedN)")
+    run.add_argument("--json", action="store_true", help="print the result as JSON at the end")
+    run.set_defaults(handler=run_command)
+
+
+def _request(args: argparse.Namespace) -> dict[str, Any]:
+    request: dict[str, Any] = {"preset": args.preset, "seed": args.seed}
+    for name in ("shape", "encoding", "population", "generations"):
+        if getattr(args, name) is not None:
+            request[name] = getattr(args, name)
+    if args.duration is not None:
+        request["sim"] = {"duration": args.duration}
+    return request
+
+
+def run_command(args: argparse.Namespace) -> int:
+    try:
+        config = resolve(_request(args))
+    except ConfigError as error:
+        args.parser.error(str(error))
+    if args.workers is not None and args.workers < 1:
+        args.parser.error(f"--workers must be >= 1, got {args.workers}")
+    out = Path(args.out or f"softevo-runs/{config.preset}-seed{config.seed}")
+    console = Console(stderr=True)
+    evolution = Evolution.start(config)
+    evaluator = make_evaluator(args.workers)
+    columns = (
+        TextColumn("generation"),
+        MofNCompleteColumn(),
+        BarColumn(),
+        TextColumn("best {task.fields[best]} m/s  {task.fields[rate]} eval/s"),
+        TimeRemainingColumn(),
+    )
+    try:
+        with Progress(*columns, console=console, transient=args.json) as progress:
+            task = progress.add_task("run", total=config.generations, best="-", rate="-")
+
+            def report(update: Any) -> None:
+                write_results(out, evolution)
+                progress.update(
+                    task,
+                    completed=update.stats.generation + 1,
+                    best=f"{update.stats.best_so_far:.4f}",
+                    rate=f"{update.evaluations_per_second:.1f}",
+                )
+
+            evolution.run(evaluator, on_generation=report)
+    except KeyboardInterrupt:
+        done = len(evolution.algorithm.state.history)
+        console.print(f"interrupted after {done} of {config.generations} generations; "
+                      f"partial results in {out}/")  # fmt: skip
+        return 130
+    finally:
+        evaluator.close()
+    write_results(out, evolution)
+    result = summary(evolution)
+    if args.json:
+        print(json.dumps({**result, "out": str(out)}, allow_nan=False))
+    else:
+        best = result["best"]
+        print(
+            f"{config.generations} generations of {config.population} "
+            f"({config.encoding}, {'x'.join(map(str, config.shape))}, seed {config.seed}): "
+            f"best {best['speed']:.4f} m/s (generation {best['generation']}), "
+            f"{result['evaluations']} simulations, {result['saved']} saved by the cache, "
+            f"{result['wall_seconds']:.1f} s\nresults in {out}/",
+            file=sys.stdout,
+        )
+    return 0

@@ -1,0 +1,56 @@
+"""`softevo run` as a user runs it: a subprocess, its files and its JSON."""
+
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+from core.robot_file import load_robot
+
+
+def softevo(*args: str) -> subprocess.CompletedProcess[str]:
+    command = [sys.executable, "-m", "softevo.cli", *args]
+    return subprocess.run(command, capture_output=True, text=True, timeout=600, check=False)
+
+
+def test_run_writes_results_and_prints_json(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    done = softevo(
+        "run", "--preset", "quick", "--generations", "4", "--population", "8",
+        "--seed", "5", "--workers", "1", "--out", str(out), "--json",
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    result = json.loads(done.stdout)
+    rows = result["generations"]
+    assert [row["generation"] for row in rows] == [0, 1, 2, 3]
+    assert set(rows[0]) >= {"best", "mean", "median", "min", "best_so_far", "diversity"}
+    assert result["run"]["seed"] == 5 and result["out"] == str(out)
+    with (out / "curve.csv").open() as handle:
+        table = list(csv.DictReader(handle))
+    assert len(table) == 4 and float(table[-1]["best_so_far"]) == rows[-1]["best_so_far"]
+    assert json.loads((out / "curve.json").read_text())["generations"] == rows
+    best = load_robot(out / "best_robot.json")
+    assert best.shape == (3, 3, 3)
+    assert result["best"]["speed"] == rows[-1]["best_so_far"]
+    again = softevo(
+        "run", "--preset", "quick", "--generations", "4", "--population", "8",
+        "--seed", "5", "--workers", "2", "--out", str(tmp_path / "again"), "--json",
+    )  # fmt: skip
+    assert json.loads(again.stdout)["generations"] == rows
+
+
+def test_bad_arguments_give_one_line_and_exit_2(tmp_path: Path) -> None:
+    for args, words in [
+        (["--population", "1"], "population"),
+        (["--shape", "5x5"], "shape"),
+        (["--preset", "nope"], "--preset"),
+        (["--workers", "0"], "--workers"),
+        (["--generations", "x"], "--generations"),
+    ]:
+        done = softevo("run", *args, "--out", str(tmp_path / "x"))
+        assert done.returncode == 2, (args, done.stderr)
+        lines = done.stderr.strip().splitlines()
+        assert len(lines) == 1 and words in lines[0], done.stderr
