@@ -144,7 +144,7 @@ def _label_materials(
         ),
     }
     rows = np.array([table[label] for label in labels], dtype=np.float64).reshape(-1, 3)
-    return rows[:, 0], rows[:, 1], rows[:, 2]
+    return tuple(np.ascontiguousarray(column) for column in rows.T)  # contiguous: one compile
 
 
 def _voxel_mechanics(robot: VoxelRobot) -> Mechanics:

@@ -92,7 +92,12 @@ def _scalars(mech: Mechanics) -> tuple:
 
 
 def _result(mech: Mechanics, start: np.ndarray, end: np.ndarray, wall: float) -> SimResult:
-    """Build a result from positions [M, 3] at settle time and at the end."""
+    """Build a result from positions [M, 3] at settle time and at the end.
+
+    Both are made C-contiguous first: NumPy sums a column in a different order for other
+    layouts, and the centre of mass must not depend on whether the robot ran alone or batched.
+    """
+    start, end = np.ascontiguousarray(start), np.ascontiguousarray(end)
     com_start = start.mean(axis=0)
     com_end = end.mean(axis=0)
     stable = bool(np.isfinite(end).all())
