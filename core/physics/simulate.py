@@ -20,8 +20,10 @@ from core.physics import kernels
 from core.robot import Mechanics, Robot, build_mechanics
 from core.settings import SimSettings
 
-#: Robots per SIMD batch: wide enough to fill the vector lanes, small enough to stay in cache.
-DEFAULT_LANES = 32
+#: Robots per `simulate_many` call. 8 doubles fill one AVX-512 vector, and a batch of 8 solid
+#: 4x4x4 robots keeps its arrays in a 1 MB L2 cache: 4 to 8 measured fastest, 32 about 30 %
+#: slower (bench/physics.py, BENCHMARKS.md).
+DEFAULT_LANES = 8
 
 
 @dataclass(frozen=True)
@@ -152,48 +154,70 @@ def simulate(
     return result, trajectory
 
 
-def _run_group(group: list[Mechanics]) -> list[SimResult]:
-    """Run robots that share settings and omega in one `simulate_many` call."""
-    first = group[0]
-    nx, ny, _ = first.lattice.shape
-    n_points = (nx + 1) * (ny + 1) * (first.lattice.shape[2] + 1)
-    # The batch topology is the union of the robots' springs, in lattice-point numbering.
-    spring_points = [m.lattice.points[m.lattice.springs] for m in group]
-    keys = [p[:, 0] * n_points + p[:, 1] for p in spring_points]
-    union_keys = np.unique(np.concatenate(keys))
-    union_points = np.unique(np.concatenate([m.lattice.points for m in group]))
-    spring_a, spring_b = (np.searchsorted(union_points, p) for p in np.divmod(union_keys, n_points))
-    n_masses, n_springs, n_robots = len(union_points), len(union_keys), len(group)
+def _box_offsets(box: tuple[int, int, int]) -> np.ndarray:
+    """Distinct positive index offsets of a point's 26 neighbours in a box of points, ascending.
 
-    # Padding masses sit at their own lattice point (distinct from every real mass) and never move.
-    grid = (first.lattice.shape[2] + 1, ny + 1, nx + 1)
-    lattice_xyz = np.stack(np.unravel_index(union_points, grid)[::-1]) * first.sim.edge_length
-    pos = np.repeat(lattice_xyz[:, :, None], n_robots, axis=2)
-    step_factor = np.zeros((n_masses, n_robots))
-    params = np.zeros((4, n_springs, n_robots))
-    mass_rows, spring_rows = [], []
-    for r, (mech, key) in enumerate(zip(group, keys, strict=True)):
-        rows = np.searchsorted(union_points, mech.lattice.points)
-        srows = np.searchsorted(union_keys, key)
-        lift = mech.positions[0, 2] - mech.lattice.rest_positions[0, 2] * mech.sim.edge_length
+    Offsets are lattice index differences: one offset may serve two directions (in a box 2
+    points wide, +1 is the +x neighbour of x = 0 and the (-x, +y) neighbour of x = 1).
+    """
+    bx, by, _ = box
+    steps = (-1, 0, 1)
+    offsets = {dx + bx * (dy + by * dz) for dz in steps for dy in steps for dx in steps}
+    return np.array(sorted(o for o in offsets if o > 0), dtype=np.int64)
+
+
+def _run_group(group: list[Mechanics]) -> list[SimResult]:
+    """Run robots that share settings and omega in one `simulate_many` call.
+
+    The kernel works on the bounding box of the robots' lattice points, numbered x fastest like
+    the lattice, with each spring in its slot (offset index q, first point); see `kernels`.
+    """
+    first = group[0]
+    nx, ny, nz = first.lattice.shape
+    grid = (nz + 1, ny + 1, nx + 1)
+    edge = first.sim.edge_length
+    # Lattice coordinates (x, y, z) of every robot's points, and their bounding box.
+    coords = [np.stack(np.unravel_index(m.lattice.points, grid)[::-1], axis=1) for m in group]
+    low = np.min([c.min(axis=0) for c in coords], axis=0)
+    box = tuple(int(v) for v in np.max([c.max(axis=0) for c in coords], axis=0) - low + 1)
+    bx, by, bz = box
+    offsets = _box_offsets(box)
+    n_points, n_robots = bx * by * bz, len(group)
+
+    # Points a robot lacks sit at their own lattice point (distinct from its masses), never move.
+    box_xyz = np.stack(np.unravel_index(np.arange(n_points), (bz, by, bx))[::-1], axis=1) + low
+    pos = np.repeat((box_xyz.T * edge)[:, :, None], n_robots, axis=2)  # [3, P, B]
+    step_factor = np.zeros((n_points, n_robots))
+    params = np.zeros((4, len(offsets), n_points, n_robots))
+    box_rows = []
+    for r, (mech, c) in enumerate(zip(group, coords, strict=True)):
+        rel = c - low
+        rows = rel[:, 0] + bx * (rel[:, 1] + by * rel[:, 2])  # box index of each mass, ascending
+        first_end, second_end = rows[mech.lattice.springs.T]
+        slot = np.searchsorted(offsets, second_end - first_end)
+        lift = mech.positions[0, 2] - mech.lattice.rest_positions[0, 2] * edge
         pos[2, :, r] += lift
         pos[:, rows, r] = mech.positions.T
         step_factor[rows, r] = mech.sim.dt / mech.sim.mass
-        params[:, srows, r] = (mech.stiffness, mech.rest_length, mech.amp_sin, mech.amp_cos)
-        mass_rows.append(rows)
-        spring_rows.append(srows)
+        params[:, slot, first_end, r] = (
+            mech.stiffness,
+            mech.rest_length,
+            mech.amp_sin,
+            mech.amp_cos,
+        )
+        box_rows.append(rows)
     vel = np.zeros_like(pos)
     settle = np.empty_like(pos)
     started = time.perf_counter()
     kernels.simulate_many(
-        pos[0], pos[1], pos[2], vel[0], vel[1], vel[2], step_factor, spring_a, spring_b,
+        pos[0], pos[1], pos[2], vel[0], vel[1], vel[2], step_factor, offsets,
         params[0], params[1], params[2], params[3], *_scalars(first),
         settle[0], settle[1], settle[2],
     )  # fmt: skip
     wall = (time.perf_counter() - started) / n_robots
     return [
         _result(mech, settle[:, rows, r].T, pos[:, rows, r].T.copy(), wall)
-        for r, (mech, rows) in enumerate(zip(group, mass_rows, strict=True))
+        for r, (mech, rows) in enumerate(zip(group, box_rows, strict=True))
     ]
 
 
