@@ -14,16 +14,13 @@ from pathlib import Path
 
 import numpy as np
 
+from core.encodings import PAPER_CUBE_OPTIONS
 from core.physics import simulate_batch
 from core.robot import LABELS, Actuation, SpringRobot, VoxelRobot
 from core.robot_file import dump_robot
 from core.settings import sim_settings
 
 HERE = Path(__file__).parent
-#: The paper's phase 2 spring options [k, b, w, c]; the fourth is the third's negative-phase twin.
-PAPER_CUBE_OPTIONS = np.array(
-    [[1000, 0, 1, 0], [2000, 0, 1, 0], [5000, 0.05, 1, 0], [5000, -0.05, 1, 0]], dtype=float
-)
 
 
 def main() -> None:
@@ -39,7 +36,7 @@ def main() -> None:
     cube = SpringRobot(
         shape=(1, 1, 1),
         filled=(True,),
-        springs=PAPER_CUBE_OPTIONS[rng.integers(0, 4, size=28)],
+        springs=np.array(PAPER_CUBE_OPTIONS)[rng.integers(0, 4, size=28)],
         sim=sim_settings(),
     )
     dump_robot(cube, HERE / "paper_cube.json")
