@@ -116,6 +116,19 @@ PRESETS: dict[str, dict[str, Any]] = {
         "mutation_genes": 2,
         "immigrants": 0.12,
     },
+    "voxel-plus": {
+        "encoding": "voxel",
+        "shape": [4, 4, 4],
+        "population": 25,
+        "generations": 100,
+        "selection": "grouped",
+        "groups": 5,
+        "survival": 0.5,
+        "crossover_probability": 1.0,
+        "mutation_probability": 0.5,
+        "mutation_genes": 2,
+        "immigrants": 0.12,
+    },
     "quick": {
         "encoding": "voxel",
         "shape": [3, 3, 3],
@@ -135,6 +148,8 @@ PRESETS: dict[str, dict[str, Any]] = {
 PRESET_DESCRIPTIONS = {
     "paper-cube": "paper phase 2: one cube, 28 springs pick one of 4 [k,b,w,c] options",
     "paper-voxel": "paper phase 3: voxel robots in a bounding box (4x4x4 by default)",
+    "voxel-plus": "paper-voxel with half the children mutated: it keeps improving where "
+    "paper-voxel stalls (docs/evolution.md)",
     "quick": "a small voxel run for demos and tests (3x3x3, 16 x 20 generations, 3 s)",
 }
 

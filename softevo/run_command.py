@@ -11,7 +11,7 @@ from typing import Any
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-from core.config import PRESETS, ConfigError, resolve
+from core.config import PRESET_DESCRIPTIONS, PRESETS, ConfigError, resolve
 from core.evaluation import make_evaluator
 from core.evolution import Evolution
 from softevo.results import summary, write_results
@@ -27,7 +27,10 @@ def add_parser(commands: Any) -> None:
             "state.json; Ctrl-C stops and keeps them."
         ),
     )
-    run.add_argument("--preset", default="quick", choices=sorted(PRESETS), help="(quick)")
+    presets = "; ".join(f"{name}: {PRESET_DESCRIPTIONS[name]}" for name in sorted(PRESETS))
+    run.add_argument(
+        "--preset", default="quick", choices=sorted(PRESETS), help=f"(quick) {presets}"
+    )
     run.add_argument("--shape", metavar="NXxNYxNZ", help="bounding box, e.g. 5x5x3")
     run.add_argument("--encoding", choices=["voxel", "cube-springs", "spring"])
     run.add_argument("--seed", type=int, default=0, help="random seed (0)")

@@ -148,3 +148,11 @@ def test_presets_resolve_with_the_papers_numbers() -> None:
     assert (voxel.population, voxel.generations, voxel.survival) == (25, 100, 0.5)
     assert (voxel.mutation_probability, voxel.immigrants, voxel.shape) == (0.02, 0.12, (5, 5, 3))
     assert voxel.sim.dt == 0.0005 and voxel.sim.damping == 0.99
+
+
+def test_voxel_plus_is_paper_voxel_with_more_mutation() -> None:
+    paper = resolve({"preset": "paper-voxel"}).to_json()
+    plus = resolve({"preset": "voxel-plus"}).to_json()
+    differing = {key for key in paper if paper[key] != plus[key]}
+    assert differing == {"preset", "mutation_probability"}
+    assert plus["mutation_probability"] == 0.5
