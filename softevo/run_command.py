@@ -89,8 +89,8 @@ def run_command(args: argparse.Namespace) -> int:
             evolution.run(evaluator, on_generation=report)
     except KeyboardInterrupt:
         done = len(evolution.algorithm.state.history)
-        console.print(f"interrupted after {done} of {config.generations} generations; "
-                      f"partial results in {out}/")  # fmt: skip
+        print(f"interrupted after {done} of {config.generations} generations; "
+              f"partial results in {out}/", file=sys.stderr)  # fmt: skip
         return 130
     finally:
         evaluator.close()

@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import csv
 import json
+import os
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 from core.robot_file import load_robot
@@ -54,3 +57,22 @@ def test_bad_arguments_give_one_line_and_exit_2(tmp_path: Path) -> None:
         assert done.returncode == 2, (args, done.stderr)
         lines = done.stderr.strip().splitlines()
         assert len(lines) == 1 and words in lines[0], done.stderr
+
+
+def test_ctrl_c_stops_cleanly_and_keeps_partial_results(tmp_path: Path) -> None:
+    out = tmp_path / "interrupted"
+    command = [sys.executable, "-m", "softevo.cli", "run", "--preset", "paper-voxel",
+               "--workers", "2", "--out", str(out)]  # fmt: skip
+    process = subprocess.Popen(
+        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True
+    )
+    deadline = time.monotonic() + 120
+    while not (out / "curve.csv").exists() and time.monotonic() < deadline:
+        time.sleep(0.1)
+    os.killpg(process.pid, signal.SIGINT)  # what Ctrl-C does: the whole process group
+    _, stderr = process.communicate(timeout=120)
+    assert process.returncode == 130, stderr
+    assert f"partial results in {out}/" in stderr
+    rows = list(csv.DictReader((out / "curve.csv").open()))
+    assert 1 <= len(rows) < 100
+    assert load_robot(out / "best_robot.json").shape == (4, 4, 4)
