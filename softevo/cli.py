@@ -32,6 +32,7 @@ def _positive_float(text: str) -> float:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
+    from core.evaluation import warm_up
     from core.physics import simulate
     from core.robot_file import RobotFileError, load_robot, with_sim
 
@@ -42,6 +43,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     except (RobotFileError, ValueError) as error:
         raise CommandError(f"{args.robot}: {error}") from None
     record_every = max(1, round(1.0 / (args.fps * robot.sim.dt))) if args.trajectory else 0
+    warm_up()  # load the compiled kernels first, so wall_seconds times the simulation alone
     result, trajectory = simulate(robot, record_every=record_every)
     if trajectory is not None:
         try:
