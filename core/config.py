@@ -88,6 +88,21 @@ class RunConfig(GAConfig):
         return self.model_dump(mode="json")
 
 
+#: The paper's phase 3 as printed (section 4.3); 5 groups where the paper says "some groups".
+_PAPER_VOXEL: dict[str, Any] = {
+    "encoding": "voxel",
+    "shape": [4, 4, 4],
+    "population": 25,
+    "generations": 100,
+    "selection": "grouped",
+    "groups": 5,
+    "survival": 0.5,
+    "crossover_probability": 1.0,
+    "mutation_probability": 0.02,
+    "mutation_genes": 2,
+    "immigrants": 0.12,
+}
+
 #: Each preset is a partial RunConfig; unspecified fields take RunConfig's defaults.
 PRESETS: dict[str, dict[str, Any]] = {
     "paper-cube": {
@@ -103,32 +118,8 @@ PRESETS: dict[str, dict[str, Any]] = {
         "mutation_genes": 2,
         "immigrants": 0.0,
     },
-    "paper-voxel": {
-        "encoding": "voxel",
-        "shape": [4, 4, 4],
-        "population": 25,
-        "generations": 100,
-        "selection": "grouped",
-        "groups": 5,
-        "survival": 0.5,
-        "crossover_probability": 1.0,
-        "mutation_probability": 0.02,
-        "mutation_genes": 2,
-        "immigrants": 0.12,
-    },
-    "voxel-plus": {
-        "encoding": "voxel",
-        "shape": [4, 4, 4],
-        "population": 25,
-        "generations": 100,
-        "selection": "grouped",
-        "groups": 5,
-        "survival": 0.5,
-        "crossover_probability": 1.0,
-        "mutation_probability": 0.5,
-        "mutation_genes": 2,
-        "immigrants": 0.12,
-    },
+    "paper-voxel": _PAPER_VOXEL,
+    "voxel-plus": {**_PAPER_VOXEL, "mutation_probability": 0.5},
     "quick": {
         "encoding": "voxel",
         "shape": [3, 3, 3],
