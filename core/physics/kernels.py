@@ -60,6 +60,18 @@ _JIT = {"cache": True, "nogil": True, "error_model": "numpy", "boundscheck": Fal
 
 
 @njit(inline="always", **_JIT)
+def _spring_force(dx, dy, dz, k, rest, amp_sin, amp_cos, sin_t, cos_t):
+    """Force f (x_j - x_i) on the first end of a spring with vector (dx, dy, dz) = x_j - x_i.
+
+    Shared by both kernels, so every spring's force is the same arithmetic in either.
+    """
+    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+    length0 = rest + amp_sin * sin_t + amp_cos * cos_t
+    f = k * (d - length0) / max(d, D_MIN)
+    return f * dx, f * dy, f * dz
+
+
+@njit(inline="always", **_JIT)
 def _integrate(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt):
     """Ground contact, friction, damping and the semi-implicit Euler update of every mass.
 
@@ -139,15 +151,9 @@ def simulate_one(
             sfy[s] = y[j] - y[i]
             sfz[s] = z[j] - z[i]
         for s in range(n_springs):
-            dx = sfx[s]
-            dy = sfy[s]
-            dz = sfz[s]
-            d = math.sqrt(dx * dx + dy * dy + dz * dz)
-            length0 = rest[s] + amp_sin[s] * sin_t + amp_cos[s] * cos_t
-            f = stiffness[s] * (d - length0) / max(d, D_MIN)
-            sfx[s] = f * dx
-            sfy[s] = f * dy
-            sfz[s] = f * dz
+            sfx[s], sfy[s], sfz[s] = _spring_force(
+                sfx[s], sfy[s], sfz[s], stiffness[s], rest[s], amp_sin[s], amp_cos[s], sin_t, cos_t
+            )
         # Force on each mass, summed in registers in spring order (what `F_i += ...` means).
         for m in range(n_masses):
             ax = 0.0
@@ -219,15 +225,10 @@ def simulate_many(
             k, r0, a_s, a_c = stiffness[q], rest[q], amp_sin[q], amp_cos[q]
             px, py, pz = sfx[q], sfy[q], sfz[q]
             for e in range(count):
-                dx = xj[e] - xi[e]
-                dy = yj[e] - yi[e]
-                dz = zj[e] - zi[e]
-                d = math.sqrt(dx * dx + dy * dy + dz * dz)
-                length0 = r0[e] + a_s[e] * sin_t + a_c[e] * cos_t
-                f = k[e] * (d - length0) / max(d, D_MIN)
-                px[e] = f * dx
-                py[e] = f * dy
-                pz[e] = f * dz
+                px[e], py[e], pz[e] = _spring_force(
+                    xj[e] - xi[e], yj[e] - yi[e], zj[e] - zi[e],
+                    k[e], r0[e], a_s[e], a_c[e], sin_t, cos_t,
+                )  # fmt: skip
         # Scatter in each point's spring order: the second ends (-=) by descending offset, then
         # the first ends (+=) by ascending offset. One loop per component: each has a single
         # store stream and a single load stream, so it vectorises with one cheap overlap check.
