@@ -29,6 +29,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from core.robot import (
     GENE_BOUNDS,
+    LABELS,
     Actuation,
     LabelledSpringRobot,
     Robot,
@@ -47,8 +48,6 @@ MAX_VOXELS = 4096
 MAX_FILE_BYTES = 8 * 1024 * 1024
 
 Side = Annotated[int, Field(strict=True, ge=1, le=MAX_SIDE)]
-Label = Literal["empty", "soft", "hard", "sine", "neg_sine"]
-Occupancy = Literal["empty", "filled"]
 Number = Annotated[float, Field(strict=True, allow_inf_nan=False)]
 SpringRow = Annotated[list[Number], Field(min_length=4, max_length=4)]
 
@@ -138,31 +137,14 @@ def parse_robot(data: Any) -> Robot:
         )
     if model.springs is not None and model.spring_labels is not None:
         raise _refuse("spring_labels", "give either 'springs' or 'spring_labels', not both")
-    try:
-        if model.spring_labels is not None:
-            genes = model.actuation or _ActuationModel()
-            robot = LabelledSpringRobot(
-                shape=(model.shape[0], model.shape[1], model.shape[2]),
-                filled=_occupancy(model.voxels, n_voxels),
-                spring_labels=tuple(model.spring_labels),
-                actuation=Actuation(genes.a, genes.b, genes.c),
-                sim=sim,
-            )
-            build_mechanics(robot)  # refuses unknown labels and a wrong count
-            return robot
-        if model.springs is None:
-            if model.voxels is None:
-                raise _refuse("voxels", "required (or give per-spring parameters in 'springs')")
-            _check_labels(model.voxels, ("empty", "soft", "hard", "sine", "neg_sine"))
-            genes = model.actuation or _ActuationModel()
-            robot: Robot = VoxelRobot(
-                shape=(model.shape[0], model.shape[1], model.shape[2]),
-                voxels=tuple(model.voxels),
-                actuation=Actuation(genes.a, genes.b, genes.c),
-                sim=sim,
-            )
-            build_mechanics(robot)  # refuses a grid with no voxel to build
-            return robot
+    shape = (model.shape[0], model.shape[1], model.shape[2])
+    genes = model.actuation or _ActuationModel()
+    actuation = Actuation(genes.a, genes.b, genes.c)
+    robot: Robot
+    if model.spring_labels is not None:
+        filled = _occupancy(model.voxels, n_voxels)
+        robot = LabelledSpringRobot(shape, filled, tuple(model.spring_labels), actuation, sim)
+    elif model.springs is not None:
         if model.actuation is not None:
             raise _refuse("actuation", "not allowed with 'springs' (each spring has its b, w, c)")
         filled = _occupancy(model.voxels, n_voxels)
@@ -171,19 +153,19 @@ def parse_robot(data: Any) -> Robot:
             try:
                 _SpringOption(k=row[0], b=row[1], w=row[2], c=row[3])
             except ValidationError as error:
-                raise RobotFileError(
-                    format_validation_error(error, prefix=f"springs.{index}")
-                ) from None
-        robot = SpringRobot(
-            shape=(model.shape[0], model.shape[1], model.shape[2]),
-            filled=filled,
-            springs=springs,
-            sim=sim,
-        )
-        build_mechanics(robot)  # refuses a spring count that does not match the lattice
-        return robot
+                prefix = f"springs.{index}"
+                raise RobotFileError(format_validation_error(error, prefix=prefix)) from None
+        robot = SpringRobot(shape, filled, springs, sim)
+    else:
+        if model.voxels is None:
+            raise _refuse("voxels", "required (or give per-spring parameters in 'springs')")
+        _check_labels(model.voxels, LABELS)
+        robot = VoxelRobot(shape, tuple(model.voxels), actuation, sim)
+    try:  # what only the lattice knows: an empty grid, a spring count, a spring label
+        build_mechanics(robot)
     except RobotError as error:
         raise RobotFileError(str(error)) from None
+    return robot
 
 
 def load_robot(path: str | Path) -> Robot:

@@ -8,7 +8,6 @@ says why. Every value is validated on construction so a bad setting is refused b
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
@@ -104,12 +103,3 @@ def format_validation_error(error: ValidationError, prefix: str = "") -> str:
     if not location:  # a model-level check: its message starts with the field it is about
         return f"{message}{suffix}"
     return f"{location}: {message}{suffix}"
-
-
-def is_finite_number(value: object) -> bool:
-    """True for an int or float that is neither NaN nor infinite (bool is not a number here)."""
-    return (
-        isinstance(value, int | float)
-        and not isinstance(value, bool)
-        and math.isfinite(float(value))
-    )
