@@ -63,6 +63,13 @@ def run_command(args: argparse.Namespace) -> int:
     if args.workers is not None and args.workers < 1:
         args.parser.error(f"--workers must be >= 1, got {args.workers}")
     out = Path(args.out or f"softevo-runs/{config.preset}-seed{config.seed}")
+    try:  # refuse an unwritable folder before anything runs
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / ".write-test"
+        probe.write_text("")
+        probe.unlink()
+    except OSError as error:
+        args.parser.error(f"--out {out}: cannot write ({error.strerror})")
     console = Console(stderr=True)
     evolution = Evolution.start(config)
     evaluator = make_evaluator(args.workers)

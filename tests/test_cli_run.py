@@ -52,8 +52,9 @@ def test_bad_arguments_give_one_line_and_exit_2(tmp_path: Path) -> None:
         (["--preset", "nope"], "--preset"),
         (["--workers", "0"], "--workers"),
         (["--generations", "x"], "--generations"),
+        (["--out", "/proc/softevo"], "cannot write"),
     ]:
-        done = softevo("run", *args, "--out", str(tmp_path / "x"))
+        done = softevo("run", "--out", str(tmp_path / "x"), *args)
         assert done.returncode == 2, (args, done.stderr)
         lines = done.stderr.strip().splitlines()
         assert len(lines) == 1 and words in lines[0], done.stderr
