@@ -1,0 +1,75 @@
+"""Leases: a run is driven by exactly one coordinator at a time.
+
+A coordinator owns a run while `runs.lease_owner` is its id and `runs.lease_expires` (unix time)
+lies ahead; it renews the lease with a heartbeat. A coordinator that dies stops renewing, and once
+the lease expires any other coordinator (or the same one restarted) may take the run over. Every
+write a driver makes is fenced by `owns()` in the same transaction, so a coordinator that lost its
+lease (paused, partitioned) can never write over its successor.
+"""
+
+from __future__ import annotations
+
+import time
+
+from sqlalchemy import case, or_, select, update
+from sqlalchemy.orm import Session
+
+from api.db import Database
+from api.models import Run
+from api.storage import now
+
+
+def _orphaned(at: float):  # type: ignore[no-untyped-def]
+    return or_(
+        Run.status == "queued",
+        (Run.status == "running") & (or_(Run.lease_expires.is_(None), Run.lease_expires < at)),
+    )
+
+
+def candidates(db: Database, limit: int) -> list[int]:
+    """Runs waiting for a coordinator: queued ones, and running ones whose lease expired."""
+    with db.read() as session:
+        query = select(Run.id).where(_orphaned(time.time())).order_by(Run.id).limit(limit)
+        return list(session.scalars(query))
+
+
+def acquire(db: Database, run_id: int, owner: str, seconds: float) -> bool:
+    at = time.time()
+    with db.write() as session:
+        result = session.execute(
+            update(Run)
+            .where(Run.id == run_id, _orphaned(at))
+            .values(
+                status="running",
+                lease_owner=owner,
+                lease_expires=at + seconds,
+                started_at=case((Run.started_at.is_(None), now()), else_=Run.started_at),
+                takeovers=case((Run.status == "running", Run.takeovers + 1), else_=Run.takeovers),
+            )
+        )
+        return result.rowcount == 1
+
+
+def owns(session: Session, run_id: int, owner: str, seconds: float) -> bool:
+    """Renew the lease inside `session`'s transaction; False if this owner lost the run."""
+    result = session.execute(
+        update(Run)
+        .where(Run.id == run_id, Run.lease_owner == owner, Run.status == "running")
+        .values(lease_expires=time.time() + seconds)
+    )
+    return result.rowcount == 1
+
+
+def renew(db: Database, run_id: int, owner: str, seconds: float) -> bool:
+    with db.write() as session:
+        return owns(session, run_id, owner, seconds)
+
+
+def release_all(db: Database, owner: str) -> None:
+    """Let every run of `owner` be taken over at once (a clean shutdown)."""
+    with db.write() as session:
+        session.execute(
+            update(Run)
+            .where(Run.lease_owner == owner, Run.status == "running")
+            .values(lease_owner=None, lease_expires=None)
+        )

@@ -1,0 +1,114 @@
+"""The database schema as SQLAlchemy 2.x models: runs, generations, individuals, sweeps.
+
+Migrations (`migrations/versions/`) create the same tables without importing this module; a test
+checks the two agree. Failed fitness is NULL with status `failed` (never 0). One row per
+individual, unique on (run, generation, index), and fitness is only ever written to a `pending`
+row, so a second fitness for the same individual is impossible.
+"""
+
+from __future__ import annotations
+
+from datetime import datetime
+from typing import Any
+
+from sqlalchemy import (
+    JSON,
+    BigInteger,
+    DateTime,
+    Float,
+    ForeignKey,
+    Index,
+    Integer,
+    String,
+    Text,
+    UniqueConstraint,
+)
+from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column
+
+RUN_STATUSES = ("queued", "running", "completed", "failed", "cancelled")
+ACTIVE_STATUSES = ("queued", "running")
+#: pending: waiting for fitness; evaluated: simulated in this generation; cached: same genome as
+#: an earlier generation's, fitness copied; failed: the simulation failed (fitness NULL).
+INDIVIDUAL_STATUSES = ("pending", "evaluated", "cached", "failed")
+
+
+class Base(DeclarativeBase):
+    pass
+
+
+class Sweep(Base):
+    __tablename__ = "sweeps"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    request: Mapped[dict[str, Any]] = mapped_column(JSON)
+    created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+
+
+class Run(Base):
+    __tablename__ = "runs"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    sweep_id: Mapped[int | None] = mapped_column(ForeignKey("sweeps.id"), index=True)
+    status: Mapped[str] = mapped_column(String(16), index=True)
+    preset: Mapped[str | None] = mapped_column(String(64))
+    seed: Mapped[int] = mapped_column(BigInteger().with_variant(Integer, "sqlite"))
+    config: Mapped[dict[str, Any]] = mapped_column(JSON)
+    ga_state: Mapped[dict[str, Any] | None] = mapped_column(JSON)
+    generations_done: Mapped[int] = mapped_column(Integer, default=0)
+    generations_total: Mapped[int] = mapped_column(Integer)
+    evaluations: Mapped[int] = mapped_column(Integer, default=0)
+    saved: Mapped[int] = mapped_column(Integer, default=0)
+    best_fitness: Mapped[float | None] = mapped_column(Float)
+    best_generation: Mapped[int | None] = mapped_column(Integer)
+    compute_seconds: Mapped[float] = mapped_column(Float, default=0.0)
+    error: Mapped[str | None] = mapped_column(Text)
+    created_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+    started_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
+    finished_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))
+    lease_owner: Mapped[str | None] = mapped_column(String(128))
+    lease_expires: Mapped[float | None] = mapped_column(Float)  # unix time (s)
+    takeovers: Mapped[int] = mapped_column(Integer, default=0)
+
+
+class Generation(Base):
+    __tablename__ = "generations"
+    __table_args__ = (UniqueConstraint("run_id", "generation", name="uq_generation"),)
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    run_id: Mapped[int] = mapped_column(ForeignKey("runs.id", ondelete="CASCADE"))
+    generation: Mapped[int] = mapped_column(Integer)
+    best: Mapped[float | None] = mapped_column(Float)
+    mean: Mapped[float | None] = mapped_column(Float)
+    median: Mapped[float | None] = mapped_column(Float)
+    min: Mapped[float | None] = mapped_column(Float)
+    std: Mapped[float | None] = mapped_column(Float)
+    best_so_far: Mapped[float | None] = mapped_column(Float)
+    diversity: Mapped[float] = mapped_column(Float)
+    size: Mapped[int] = mapped_column(Integer)
+    failed: Mapped[int] = mapped_column(Integer)
+    evaluations: Mapped[int] = mapped_column(Integer)
+    saved: Mapped[int] = mapped_column(Integer)
+    seconds: Mapped[float] = mapped_column(Float)  # wall time of this generation's evaluation
+    committed_at: Mapped[datetime] = mapped_column(DateTime(timezone=True))
+
+
+class Individual(Base):
+    __tablename__ = "individuals"
+    __table_args__ = (
+        UniqueConstraint("run_id", "generation", "index", name="uq_individual"),
+        Index("ix_individuals_run_hash", "run_id", "genome_hash"),
+    )
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True)
+    run_id: Mapped[int] = mapped_column(ForeignKey("runs.id", ondelete="CASCADE"))
+    generation: Mapped[int] = mapped_column(Integer)
+    index: Mapped[int] = mapped_column(Integer)
+    genome: Mapped[dict[str, Any]] = mapped_column(JSON)
+    genome_hash: Mapped[str] = mapped_column(String(32))
+    operator: Mapped[str] = mapped_column(String(32))
+    parents: Mapped[list[int]] = mapped_column(JSON)
+    status: Mapped[str] = mapped_column(String(16), default="pending")
+    fitness: Mapped[float | None] = mapped_column(Float)
+    eval_seconds: Mapped[float | None] = mapped_column(Float)
+    worker: Mapped[str | None] = mapped_column(String(128))
+    evaluated_at: Mapped[datetime | None] = mapped_column(DateTime(timezone=True))

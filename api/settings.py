@@ -1,0 +1,85 @@
+"""Service settings, read once from the environment (`SOFTEVO_*`) by `get_settings()`.
+
+Every setting has a default that runs a real experiment on a fresh machine: SQLite in
+`./softevo.db`, an in-process worker pool, no token. Ceilings bound what one `POST /runs` may ask
+for, so a request that would occupy the service for days is refused before anything is queued.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field, fields
+from functools import lru_cache
+
+DEFAULT_DATABASE_URL = "sqlite:///softevo.db"
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Ceilings on one run, checked at `POST /runs` (422 naming the field when exceeded)."""
+
+    max_population: int = 1000
+    max_generations: int = 10_000
+    max_voxels: int = 512
+    max_duration: float = 60.0  # simulated seconds per robot
+    min_dt: float = 1e-4  # s
+    max_evaluations: int = 1_000_000  # population x generations
+    max_sweep_runs: int = 200
+
+
+@dataclass(frozen=True)
+class Settings:
+    """How this process serves: where it stores, how it evaluates, how many runs at once."""
+
+    database_url: str = DEFAULT_DATABASE_URL
+    redis_url: str | None = None
+    api_token: str | None = None
+    max_running: int = 2  # runs driven at once by this process; the rest wait, queued
+    workers: int | None = None  # in-process pool size (default: one per core)
+    batch_size: int = 4  # robots per evaluator call; fitness is saved batch by batch
+    lease_seconds: float = 15.0  # a coordinator that stops heartbeating loses its runs after this
+    poll_seconds: float = 0.5  # how often the scheduler looks for queued or orphaned runs
+    limits: Limits = field(default_factory=Limits)
+
+    @classmethod
+    def from_env(cls, environ: dict[str, str] | None = None) -> Settings:
+        """Settings from `SOFTEVO_*` variables; a bad value raises ValueError naming it."""
+        env = dict(os.environ if environ is None else environ)
+        values: dict[str, object] = {}
+        for item in fields(cls):
+            if item.name == "limits":
+                continue
+            raw = env.get(f"SOFTEVO_{item.name.upper()}")
+            if raw is not None and raw != "":
+                values[item.name] = _parse(f"SOFTEVO_{item.name.upper()}", raw, item.type)
+        limits: dict[str, object] = {}
+        for item in fields(Limits):
+            raw = env.get(f"SOFTEVO_{item.name.upper()}")
+            if raw is not None and raw != "":
+                limits[item.name] = _parse(f"SOFTEVO_{item.name.upper()}", raw, item.type)
+        settings = cls(**values, limits=Limits(**limits))  # type: ignore[arg-type]
+        for name in ("max_running", "batch_size"):
+            if getattr(settings, name) < 1:
+                raise ValueError(f"SOFTEVO_{name.upper()}: must be >= 1")
+        if settings.workers is not None and settings.workers < 1:
+            raise ValueError("SOFTEVO_WORKERS: must be >= 1")
+        if settings.lease_seconds <= 0 or settings.poll_seconds <= 0:
+            raise ValueError("SOFTEVO_LEASE_SECONDS and SOFTEVO_POLL_SECONDS must be > 0")
+        return settings
+
+
+def _parse(name: str, raw: str, kind: object) -> object:
+    kind = str(kind)
+    try:
+        if "int" in kind:
+            return int(raw)
+        if "float" in kind:
+            return float(raw)
+    except ValueError:
+        raise ValueError(f"{name}: expected a number, got {raw!r}") from None
+    return raw
+
+
+@lru_cache
+def get_settings() -> Settings:
+    return Settings.from_env()

@@ -1,0 +1,216 @@
+"""Reads and writes of runs, sweeps, generations and individuals for the API.
+
+ORM rows are turned into plain frozen values here (`RunRecord`, dicts of JSON-safe values), so
+no session or lazy attribute ever leaks into a route. The coordinator's own writes (leases,
+fitness, generation commits) live in `api.leases` and `api.coordinator`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from typing import Any
+
+from sqlalchemy import func, select, update
+
+from api.db import Database
+from api.models import ACTIVE_STATUSES, Generation, Individual, Run, Sweep
+from core.config import RunConfig
+from core.evolution import CURVE_COLUMNS
+
+
+def now() -> datetime:
+    return datetime.now(UTC)
+
+
+class NotFoundError(LookupError):
+    """An unknown id; the message names it."""
+
+
+class ConflictError(RuntimeError):
+    """An action the run's state forbids."""
+
+
+@dataclass(frozen=True)
+class RunRecord:
+    id: int
+    status: str
+    preset: str | None
+    seed: int
+    config: dict[str, Any]
+    sweep_id: int | None
+    generations_done: int
+    generations_total: int
+    evaluations: int
+    saved: int
+    best_fitness: float | None
+    best_generation: int | None
+    compute_seconds: float
+    error: str | None
+    created_at: datetime
+    started_at: datetime | None
+    finished_at: datetime | None
+    takeovers: int
+    ga_state: dict[str, Any] | None
+
+
+def _record(row: Run) -> RunRecord:
+    return RunRecord(
+        id=row.id, status=row.status, preset=row.preset, seed=row.seed, config=row.config,
+        sweep_id=row.sweep_id, generations_done=row.generations_done,
+        generations_total=row.generations_total, evaluations=row.evaluations, saved=row.saved,
+        best_fitness=row.best_fitness, best_generation=row.best_generation,
+        compute_seconds=row.compute_seconds, error=row.error, created_at=row.created_at,
+        started_at=row.started_at, finished_at=row.finished_at, takeovers=row.takeovers,
+        ga_state=row.ga_state,
+    )  # fmt: skip
+
+
+def _new_run(config: RunConfig, sweep_id: int | None = None) -> Run:
+    return Run(
+        sweep_id=sweep_id, status="queued", preset=config.preset, seed=config.seed,
+        config=config.to_json(), ga_state=None, generations_done=0,
+        generations_total=config.generations, evaluations=0, saved=0, compute_seconds=0.0,
+        created_at=now(), takeovers=0,
+    )  # fmt: skip
+
+
+def create_run(db: Database, config: RunConfig) -> RunRecord:
+    with db.write() as session:
+        row = _new_run(config)
+        session.add(row)
+        session.flush()
+        return _record(row)
+
+
+def create_sweep(
+    db: Database, request: dict[str, Any], configs: list[RunConfig]
+) -> tuple[int, list[int]]:
+    """One sweep row and its runs, all in one transaction (all queued, or none)."""
+    with db.write() as session:
+        sweep = Sweep(request=request, created_at=now())
+        session.add(sweep)
+        session.flush()
+        rows = [_new_run(config, sweep.id) for config in configs]
+        session.add_all(rows)
+        session.flush()
+        return sweep.id, [row.id for row in rows]
+
+
+def get_run(db: Database, run_id: int) -> RunRecord:
+    with db.read() as session:
+        row = session.get(Run, run_id)
+        if row is None:
+            raise NotFoundError(f"run {run_id} not found")
+        return _record(row)
+
+
+def list_runs(
+    db: Database, status: str | None, offset: int, limit: int
+) -> tuple[list[RunRecord], int]:
+    with db.read() as session:
+        query = select(Run)
+        if status is not None:
+            query = query.where(Run.status == status)
+        total = session.scalar(select(func.count()).select_from(query.subquery())) or 0
+        rows = session.scalars(query.order_by(Run.id.desc()).offset(offset).limit(limit))
+        return [_record(row) for row in rows], total
+
+
+def cancel_run(db: Database, run_id: int) -> RunRecord:
+    """Queued or running -> cancelled, at once; results so far are kept. 409 otherwise."""
+    with db.write() as session:
+        row = session.get(Run, run_id)
+        if row is None:
+            raise NotFoundError(f"run {run_id} not found")
+        if row.status not in ACTIVE_STATUSES:
+            raise ConflictError(f"run {run_id} is {row.status}; only queued or running runs cancel")
+        session.execute(
+            update(Run)
+            .where(Run.id == run_id)
+            .values(status="cancelled", finished_at=now(), lease_owner=None, lease_expires=None)
+        )
+    return get_run(db, run_id)
+
+
+def _finite(value: float | None) -> float | None:
+    return value if value is not None and math.isfinite(value) else None
+
+
+def curve(db: Database, run_id: int) -> list[dict[str, Any]]:
+    """Committed generations in order, with the columns of `CURVE_COLUMNS`."""
+    with db.read() as session:
+        rows = session.scalars(
+            select(Generation).where(Generation.run_id == run_id).order_by(Generation.generation)
+        )
+        return [{column: getattr(row, column) for column in CURVE_COLUMNS} for row in rows]
+
+
+def individual_json(row: Individual, population: int) -> dict[str, Any]:
+    return {
+        "id": row.generation * population + row.index,
+        "generation": row.generation,
+        "index": row.index,
+        "fitness": _finite(row.fitness),
+        "status": row.status,
+        "operator": row.operator,
+        "parents": row.parents,
+        "genome_hash": row.genome_hash,
+        "eval_seconds": row.eval_seconds,
+        "worker": row.worker,
+    }
+
+
+def list_individuals(
+    db: Database, run: RunRecord, generation: int | None, offset: int, limit: int
+) -> tuple[list[dict[str, Any]], int]:
+    population = run.config["population"]
+    with db.read() as session:
+        query = select(Individual).where(Individual.run_id == run.id)
+        if generation is not None:
+            query = query.where(Individual.generation == generation)
+        total = session.scalar(select(func.count()).select_from(query.subquery())) or 0
+        rows = session.scalars(
+            query.order_by(Individual.generation, Individual.index).offset(offset).limit(limit)
+        )
+        return [individual_json(row, population) for row in rows], total
+
+
+def get_individual(db: Database, run: RunRecord, number: int) -> dict[str, Any]:
+    """Individual `number` = generation * population + index, with its genome."""
+    population = run.config["population"]
+    generation, index = divmod(number, population)
+    with db.read() as session:
+        row = session.scalar(
+            select(Individual).where(
+                Individual.run_id == run.id,
+                Individual.generation == generation,
+                Individual.index == index,
+            )
+        )
+        if row is None:
+            raise NotFoundError(f"run {run.id} has no individual {number}")
+        return {**individual_json(row, population), "genome": row.genome}
+
+
+def get_sweep(db: Database, sweep_id: int) -> tuple[dict[str, Any], list[RunRecord]]:
+    with db.read() as session:
+        sweep = session.get(Sweep, sweep_id)
+        if sweep is None:
+            raise NotFoundError(f"sweep {sweep_id} not found")
+        rows = session.scalars(select(Run).where(Run.sweep_id == sweep_id).order_by(Run.id))
+        return {"id": sweep.id, "request": sweep.request, "created_at": sweep.created_at}, [
+            _record(row) for row in rows
+        ]
+
+
+def progress_counts(db: Database, run_id: int) -> dict[str, int]:
+    """Individuals by status (fitness saved so far, also of the generation in progress)."""
+    with db.read() as session:
+        rows = session.execute(
+            select(Individual.status, func.count())
+            .where(Individual.run_id == run_id)
+            .group_by(Individual.status)
+        )
+        return {status: count for status, count in rows}
