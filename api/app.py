@@ -1,0 +1,119 @@
+"""The FastAPI application: `create_app()` builds it; resources are made in the lifespan.
+
+On start: open the database (the embedded SQLite default is migrated on the spot; PostgreSQL must
+be at the latest migration, `softevo db upgrade`), make the evaluator and start the coordinator,
+which takes over any run whose lease has expired. On stop: hand the runs back at once.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import AsyncIterator, Callable
+from contextlib import asynccontextmanager
+
+from alembic.script import ScriptDirectory
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from sqlalchemy.exc import InterfaceError, OperationalError
+
+from api import storage
+from api.coordinator import Coordinator
+from api.db import Database, alembic_config, current_revision
+from api.routes import meta, runs, sweeps
+from api.settings import Settings, get_settings
+from api.validation import RequestError
+from core.evaluation import Evaluator, make_evaluator
+
+log = logging.getLogger("softevo.api")
+
+
+class DatabaseNotMigratedError(RuntimeError):
+    pass
+
+
+def check_migrated(db: Database) -> None:
+    head = ScriptDirectory.from_config(alembic_config()).get_current_head()
+    found = current_revision(db.engine)
+    if found != head:
+        raise DatabaseNotMigratedError(
+            f"database is at migration {found or 'none'}, expected {head}: run `softevo db upgrade`"
+        )
+
+
+def create_app(
+    settings: Settings | None = None,
+    evaluator_factory: Callable[[Settings], Evaluator] | None = None,
+) -> FastAPI:
+    settings = settings or get_settings()
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        db = Database(settings.database_url)
+        if db.is_sqlite:
+            db.upgrade()
+        else:
+            check_migrated(db)
+        factory = evaluator_factory or (lambda s: make_evaluator(s.workers, min_chunk=s.batch_size))
+        evaluator = factory(settings)
+        coordinator = Coordinator(
+            db,
+            evaluator,
+            max_running=settings.max_running,
+            batch_size=settings.batch_size,
+            lease_seconds=settings.lease_seconds,
+            poll_seconds=settings.poll_seconds,
+        )
+        app.state.settings, app.state.db, app.state.coordinator = settings, db, coordinator
+        coordinator.start()
+        try:
+            yield
+        finally:
+            coordinator.stop()
+            evaluator.close()
+            db.dispose()
+
+    app = FastAPI(
+        title="softevo",
+        summary="Evolve modular soft crawling robots",
+        version="0.1.0",
+        lifespan=lifespan,
+    )
+    app.include_router(runs.router)
+    app.include_router(sweeps.router)
+    app.include_router(meta.router)
+    _install_error_handlers(app)
+    return app
+
+
+def _install_error_handlers(app: FastAPI) -> None:
+    @app.exception_handler(storage.NotFoundError)
+    async def not_found(_request: Request, error: storage.NotFoundError) -> JSONResponse:
+        return JSONResponse({"detail": str(error)}, status_code=404)
+
+    @app.exception_handler(storage.ConflictError)
+    async def conflict(_request: Request, error: storage.ConflictError) -> JSONResponse:
+        return JSONResponse({"detail": str(error)}, status_code=409)
+
+    @app.exception_handler(RequestError)
+    async def bad_request(_request: Request, error: RequestError) -> JSONResponse:
+        return JSONResponse({"detail": [error.to_json()]}, status_code=422)
+
+    @app.exception_handler(RequestValidationError)
+    async def invalid(_request: Request, error: RequestValidationError) -> JSONResponse:
+        detail = [
+            {"loc": list(e.get("loc", ())), "msg": str(e.get("msg", "")), "type": e.get("type")}
+            for e in error.errors()
+        ]
+        return JSONResponse({"detail": detail}, status_code=422)
+
+    @app.exception_handler(OperationalError)
+    @app.exception_handler(InterfaceError)
+    async def database_away(_request: Request, error: Exception) -> JSONResponse:
+        log.warning("database unavailable: %s", type(error).__name__)
+        return JSONResponse({"detail": "database unavailable, try again"}, status_code=503)
+
+    @app.exception_handler(Exception)
+    async def internal(_request: Request, error: Exception) -> JSONResponse:
+        log.exception("unhandled error")
+        return JSONResponse({"detail": "internal server error"}, status_code=500)

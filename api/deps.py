@@ -1,0 +1,52 @@
+"""FastAPI dependencies: settings, the database, the coordinator and the token check."""
+
+from __future__ import annotations
+
+import hmac
+from typing import Annotated
+
+from fastapi import Depends, HTTPException, Request, status
+from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
+
+from api.coordinator import Coordinator
+from api.db import Database
+from api.settings import Settings
+
+
+def get_settings(request: Request) -> Settings:
+    return request.app.state.settings
+
+
+def get_db(request: Request) -> Database:
+    return request.app.state.db
+
+
+def get_coordinator(request: Request) -> Coordinator:
+    return request.app.state.coordinator
+
+
+_bearer = HTTPBearer(auto_error=False, description="needed when SOFTEVO_API_TOKEN is set")
+
+
+def require_token(
+    settings: Annotated[Settings, Depends(get_settings)],
+    credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
+) -> None:
+    """State-changing requests need `Authorization: Bearer <token>` when a token is set."""
+    expected = settings.api_token
+    if not expected:
+        return
+    if credentials is None:
+        raise HTTPException(
+            status.HTTP_401_UNAUTHORIZED,
+            "missing bearer token (Authorization: Bearer <token>)",
+            headers={"WWW-Authenticate": "Bearer"},
+        )
+    if not hmac.compare_digest(credentials.credentials.encode(), expected.encode()):
+        raise HTTPException(status.HTTP_403_FORBIDDEN, "wrong bearer token")
+
+
+SettingsDep = Annotated[Settings, Depends(get_settings)]
+DatabaseDep = Annotated[Database, Depends(get_db)]
+CoordinatorDep = Annotated[Coordinator, Depends(get_coordinator)]
+TokenDep = Depends(require_token)

@@ -1,0 +1,53 @@
+"""`/healthz` and `/presets`."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter, Response
+
+from api.deps import CoordinatorDep, DatabaseDep, SettingsDep
+from api.schemas import Health, Preset
+from core.config import PRESET_DESCRIPTIONS, PRESETS
+
+router = APIRouter(tags=["meta"])
+
+
+@router.get("/healthz", responses={503: {"model": Health}})
+def healthz(
+    db: DatabaseDep, settings: SettingsDep, coordinator: CoordinatorDep, response: Response
+) -> Health:
+    """The database and, when configured, Redis; 503 when either is down."""
+    database = redis = "ok"
+    try:
+        db.ping()
+    except Exception as error:
+        database = f"down: {type(error).__name__}"
+    if settings.redis_url is None:
+        redis = "not configured"
+    else:
+        try:
+            import redis as redis_client
+
+            client = redis_client.Redis.from_url(
+                settings.redis_url, socket_connect_timeout=1, socket_timeout=1
+            )
+            client.ping()
+        except Exception as error:
+            redis = f"down: {type(error).__name__}"
+    healthy = database == "ok" and redis in ("ok", "not configured")
+    if not healthy:
+        response.status_code = 503
+    return Health(
+        status="ok" if healthy else "degraded",
+        database=database,
+        redis=redis,
+        coordinator={"owner": coordinator.owner, "driving": coordinator.active},
+    )
+
+
+@router.get("/presets")
+def presets() -> list[Preset]:
+    """The named starting points of `POST /runs`, with their settings."""
+    return [
+        Preset(name=name, description=PRESET_DESCRIPTIONS[name], settings=settings)
+        for name, settings in PRESETS.items()
+    ]

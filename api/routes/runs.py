@@ -1,0 +1,243 @@
+"""`/runs`: start, list, inspect and cancel runs; their curves, individuals and best robot."""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from typing import Annotated, Any, Literal
+
+from fastapi import APIRouter, Body, Path, Query, Request, Response, status
+from fastapi.responses import StreamingResponse
+
+from api import storage
+from api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TokenDep
+from api.events import event_stream
+from api.schemas import (
+    Curve,
+    IndividualDetail,
+    IndividualPage,
+    Message,
+    RunCreate,
+    RunPage,
+    RunProgress,
+    RunPublic,
+)
+from api.validation import run_config
+from core.config import RunConfig
+from core.evolution import CURVE_COLUMNS
+from core.genome import Genome
+from core.robot_file import robot_to_json
+
+router = APIRouter(prefix="/runs", tags=["runs"])
+RunId = Annotated[int, Path(ge=1, le=2**31 - 1, description="run id")]
+NOT_FOUND: dict[int | str, dict[str, Any]] = {404: {"model": Message}}
+
+
+def run_public(db: storage.Database, run: storage.RunRecord) -> RunPublic:
+    counts = storage.progress_counts(db, run.id)
+    rate = run.evaluations / run.compute_seconds if run.compute_seconds > 0 else None
+    per_generation = run.compute_seconds / run.generations_done if run.generations_done else None
+    eta = None
+    if run.status in ("queued", "running") and per_generation is not None:
+        eta = per_generation * (run.generations_total - run.generations_done)
+    return RunPublic(
+        id=run.id,
+        status=run.status,  # type: ignore[arg-type]
+        preset=run.preset,
+        seed=run.seed,
+        sweep_id=run.sweep_id,
+        progress=RunProgress(
+            generation=run.generations_done,
+            generations=run.generations_total,
+            evaluations=run.evaluations,
+            saved=run.saved,
+            fitness_saved=sum(n for s, n in counts.items() if s != "pending"),
+            evaluations_per_second=rate,
+            best_fitness=run.best_fitness,
+            best_generation=run.best_generation,
+            eta_seconds=eta,
+        ),
+        config=run.config,
+        error=run.error,
+        created_at=run.created_at,
+        started_at=run.started_at,
+        finished_at=run.finished_at,
+        takeovers=run.takeovers,
+    )
+
+
+@router.post(
+    "",
+    status_code=status.HTTP_201_CREATED,
+    dependencies=[TokenDep],
+    responses={401: {"model": Message}, 403: {"model": Message}},
+)
+def create_run(
+    body: Annotated[RunCreate, Body()],
+    db: DatabaseDep,
+    settings: SettingsDep,
+    coordinator: CoordinatorDep,
+    response: Response,
+) -> RunPublic:
+    """Queue a run: a preset plus any setting to override. 422 names a bad or too-large field."""
+    config = run_config(body.model_dump(exclude_unset=True), settings.limits)
+    record = storage.create_run(db, config)
+    coordinator.wake()
+    response.headers["Location"] = f"/runs/{record.id}"
+    return run_public(db, record)
+
+
+@router.get("")
+def list_runs(
+    db: DatabaseDep,
+    status_: Annotated[
+        Literal["queued", "running", "completed", "failed", "cancelled"] | None,
+        Query(alias="status"),
+    ] = None,
+    offset: Annotated[int, Query(ge=0, le=10**9)] = 0,
+    limit: Annotated[int, Query(ge=1, le=200)] = 50,
+) -> RunPage:
+    """Newest first."""
+    records, total = storage.list_runs(db, status_, offset, limit)
+    return RunPage(
+        items=[run_public(db, r) for r in records], total=total, offset=offset, limit=limit
+    )
+
+
+@router.get("/{run_id}", responses=NOT_FOUND)
+def get_run(run_id: RunId, db: DatabaseDep) -> RunPublic:
+    """Status and progress: generation g of G, evaluations, rate, best fitness, ETA."""
+    return run_public(db, storage.get_run(db, run_id))
+
+
+@router.post(
+    "/{run_id}/cancel",
+    dependencies=[TokenDep],
+    responses={**NOT_FOUND, 409: {"model": Message}, 401: {"model": Message}},
+)
+def cancel_run(run_id: RunId, db: DatabaseDep, coordinator: CoordinatorDep) -> RunPublic:
+    """Stop a queued or running run at once; the results so far are kept. 409 otherwise."""
+    record = storage.cancel_run(db, run_id)
+    coordinator.cancel(run_id)
+    return run_public(db, record)
+
+
+def _csv(rows: list[dict[str, Any]]) -> str:
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(CURVE_COLUMNS)
+    for row in rows:
+        writer.writerow(["" if row[c] is None else repr(row[c]) for c in CURVE_COLUMNS])
+    return buffer.getvalue()
+
+
+@router.get(
+    "/{run_id}/curve",
+    responses={**NOT_FOUND, 200: {"content": {"text/csv": {}}}},
+)
+def get_curve(
+    run_id: RunId,
+    db: DatabaseDep,
+    format: Annotated[Literal["json", "csv"], Query()] = "json",
+) -> Any:
+    """One row per committed generation: best, mean, median, min, best so far, diversity, ..."""
+    storage.get_run(db, run_id)
+    rows = storage.curve(db, run_id)
+    if format == "csv":
+        return Response(
+            _csv(rows),
+            media_type="text/csv",
+            headers={"Content-Disposition": f'attachment; filename="run-{run_id}-curve.csv"'},
+        )
+    return Curve(run_id=run_id, generations=rows)  # type: ignore[arg-type]
+
+
+@router.get("/{run_id}/individuals", responses=NOT_FOUND)
+def list_individuals(
+    run_id: RunId,
+    db: DatabaseDep,
+    generation: Annotated[int | None, Query(ge=0, le=10**6)] = None,
+    offset: Annotated[int, Query(ge=0, le=10**9)] = 0,
+    limit: Annotated[int, Query(ge=1, le=5000)] = 1000,
+) -> IndividualPage:
+    """Every individual's fitness by generation (the population dot plot), paginated."""
+    run = storage.get_run(db, run_id)
+    items, total = storage.list_individuals(db, run, generation, offset, limit)
+    return IndividualPage(
+        run_id=run_id,
+        items=items,  # type: ignore[arg-type]
+        total=total,
+        offset=offset,
+        limit=limit,
+    )
+
+
+@router.get("/{run_id}/individuals/{number}", responses=NOT_FOUND)
+def get_individual(
+    run_id: RunId,
+    number: Annotated[int, Path(ge=0, le=2**31 - 1, description="generation * P + index")],
+    db: DatabaseDep,
+) -> IndividualDetail:
+    """One individual with its genome and robot file."""
+    run = storage.get_run(db, run_id)
+    data = storage.get_individual(db, run, number)
+    config = RunConfig.model_validate(run.config)
+    robot = config.make_encoding().to_robot(Genome.from_json(data["genome"]), config.sim)
+    return IndividualDetail(**data, robot=robot_to_json(robot))
+
+
+def _best_robot(db: storage.Database, run_id: int) -> Any:
+    run = storage.get_run(db, run_id)
+    best = (run.ga_state or {}).get("best")
+    if best is None:
+        raise storage.NotFoundError(f"run {run_id} has no evaluated generation yet")
+    config = RunConfig.model_validate(run.config)
+    return config.make_encoding().to_robot(Genome.from_json(best["genome"]), config.sim), best
+
+
+@router.get("/{run_id}/best", responses=NOT_FOUND)
+def get_best(run_id: RunId, db: DatabaseDep) -> dict[str, Any]:
+    """The fastest robot so far as a robot file (softevo.robot/1)."""
+    robot, _best = _best_robot(db, run_id)
+    return robot_to_json(robot)
+
+
+@router.get("/{run_id}/best/replay", responses=NOT_FOUND)
+def get_replay(
+    run_id: RunId,
+    db: DatabaseDep,
+    fps: Annotated[float, Query(gt=0, le=120)] = 30.0,
+) -> dict[str, Any]:
+    """Frames of mass positions (and the springs) of the best robot, for a 3D viewer."""
+    from core.physics import simulate  # the physics is loaded only when a replay is asked for
+
+    robot, best = _best_robot(db, run_id)
+    record_every = max(1, round(1.0 / (fps * robot.sim.dt)))
+    result, trajectory = simulate(robot, record_every=record_every)
+    assert trajectory is not None
+    return {
+        "run_id": run_id,
+        "fitness": best["fitness"],
+        "generation": best["generation"],
+        "speed": result.speed if math.isfinite(result.speed) else None,
+        "robot": robot_to_json(robot),
+        **trajectory.to_json(),
+    }
+
+
+@router.get(
+    "/{run_id}/events",
+    responses={**NOT_FOUND, 200: {"content": {"text/event-stream": {}}}},
+    response_class=StreamingResponse,
+)
+def get_events(run_id: RunId, db: DatabaseDep, request: Request) -> StreamingResponse:
+    """Server-sent events: `generation` per committed generation, then `end` with the run."""
+    storage.get_run(db, run_id)
+    last = request.headers.get("last-event-id")
+    after = int(last) if last is not None and last.lstrip("-").isdigit() else -1
+    return StreamingResponse(
+        event_stream(request, db, run_id, after, lambda r: run_public(db, r)),
+        media_type="text/event-stream",
+        headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"},
+    )

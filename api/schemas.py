@@ -1,0 +1,164 @@
+"""Request and response bodies of the REST API (the OpenAPI schema at /docs is built from these).
+
+`RunCreate` is a preset name plus any setting to override; the merged result is validated by
+`core.config.resolve` (which names the offending field) and then checked against the service's
+ceilings (`api.settings.Limits`).
+"""
+
+from __future__ import annotations
+
+from datetime import datetime
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, create_model
+
+from core.config import PAPER_NINE_SHAPES
+from core.ga.algorithm import GAConfig
+
+Shape = tuple[int, int, int]
+
+
+class _RunSettings(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    preset: str = Field("paper-voxel", description="preset whose settings the others override")
+    encoding: Literal["voxel", "cube-springs", "spring"] | None = None
+    sim: dict[str, float] | None = Field(None, description="simulation settings to override")
+    cube_options: list[tuple[float, float, float, float]] | None = None
+
+
+#: Every GA setting, optional (None: the preset's value).
+_GA_FIELDS: dict[str, Any] = {
+    name: (info.annotation | None, Field(None, description=info.description))
+    for name, info in GAConfig.model_fields.items()
+}
+RunSettings = create_model("RunSettings", __base__=_RunSettings, **_GA_FIELDS)
+
+
+class RunCreate(RunSettings):  # type: ignore[misc, valid-type]
+    """`{"preset": "paper-voxel", "seed": 1, "shape": [5, 5, 3], ...}`."""
+
+    seed: int = Field(0, ge=0, le=2**63 - 1)
+    shape: Shape | None = Field(None, description="bounding box [nx, ny, nz] in voxels")
+
+
+class SweepCreate(RunSettings):  # type: ignore[misc, valid-type]
+    """One base config over many bounding boxes and seeds (default: the paper's nine, seeds 1-3)."""
+
+    shapes: list[Shape] = Field(default_factory=lambda: [list(s) for s in PAPER_NINE_SHAPES])
+    seeds: list[int] = Field(default_factory=lambda: [1, 2, 3])
+
+
+class RunProgress(BaseModel):
+    generation: int = Field(description="generations committed")
+    generations: int
+    evaluations: int = Field(description="simulations run (committed generations)")
+    saved: int = Field(description="individuals whose fitness came from the run's cache")
+    fitness_saved: int = Field(description="individuals with a fitness in the database")
+    evaluations_per_second: float | None
+    best_fitness: float | None
+    best_generation: int | None
+    eta_seconds: float | None
+
+
+class RunPublic(BaseModel):
+    id: int
+    status: Literal["queued", "running", "completed", "failed", "cancelled"]
+    preset: str | None
+    seed: int
+    sweep_id: int | None
+    progress: RunProgress
+    config: dict[str, Any]
+    error: str | None
+    created_at: datetime
+    started_at: datetime | None
+    finished_at: datetime | None
+    takeovers: int = Field(description="times another coordinator took the run over")
+
+
+class RunPage(BaseModel):
+    items: list[RunPublic]
+    total: int
+    offset: int
+    limit: int
+
+
+class CurveRow(BaseModel):
+    generation: int
+    best: float | None
+    mean: float | None
+    median: float | None
+    min: float | None
+    best_so_far: float | None
+    diversity: float
+    evaluations: int
+    saved: int
+    failed: int
+    std: float | None
+
+
+class Curve(BaseModel):
+    run_id: int
+    generations: list[CurveRow]
+
+
+class IndividualPublic(BaseModel):
+    id: int = Field(description="generation * population + index")
+    generation: int
+    index: int
+    fitness: float | None
+    status: Literal["pending", "evaluated", "cached", "failed"]
+    operator: str
+    parents: list[int]
+    genome_hash: str
+    eval_seconds: float | None
+    worker: str | None
+
+
+class IndividualDetail(IndividualPublic):
+    genome: dict[str, Any]
+    robot: dict[str, Any] = Field(description="the robot file (softevo.robot/1)")
+
+
+class IndividualPage(BaseModel):
+    run_id: int
+    items: list[IndividualPublic]
+    total: int
+    offset: int
+    limit: int
+
+
+class SweepBox(BaseModel):
+    shape: Shape
+    run_ids: list[int]
+    statuses: list[str]
+    completed: int
+    best_mean: float | None
+    best_std: float | None
+    best_min: float | None
+    best_max: float | None
+
+
+class SweepPublic(BaseModel):
+    id: int
+    status: Literal["queued", "running", "completed", "failed", "cancelled"]
+    created_at: datetime
+    request: dict[str, Any]
+    boxes: list[SweepBox]
+
+
+class Preset(BaseModel):
+    name: str
+    description: str
+    settings: dict[str, Any]
+
+
+class Health(BaseModel):
+    status: Literal["ok", "degraded"]
+    database: str
+    redis: str
+    coordinator: dict[str, Any]
+
+
+class Message(BaseModel):
+    detail: str

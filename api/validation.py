@@ -1,0 +1,68 @@
+"""From a request body to a `RunConfig`: merge with the preset, validate, check the ceilings.
+
+Every refusal is a `RequestError` whose `loc` names the field, turned into a 422 with the same
+shape as FastAPI's own validation errors, before anything is written or queued.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Any
+
+from api.settings import Limits
+from core.config import ConfigError, RunConfig, resolve
+
+_FIELD = re.compile(r"^([A-Za-z_][\w.]*): ")
+
+
+class RequestError(ValueError):
+    """A refused request body; `loc` is the path of the offending field."""
+
+    def __init__(self, loc: list[str | int], message: str) -> None:
+        super().__init__(message)
+        self.loc = loc
+        self.message = message
+
+    def to_json(self) -> dict[str, Any]:
+        return {"loc": ["body", *self.loc], "msg": self.message, "type": "value_error"}
+
+
+def run_config(request: dict[str, Any], limits: Limits, prefix: tuple[str, ...] = ()) -> RunConfig:
+    try:
+        config = resolve(request)
+    except ConfigError as error:
+        message = str(error)
+        match = _FIELD.match(message)
+        loc: list[str | int] = [*prefix, *(match.group(1).split(".") if match else [])]
+        raise RequestError(loc, message) from None
+    check_limits(config, limits, prefix)
+    return config
+
+
+def check_limits(config: RunConfig, limits: Limits, prefix: tuple[str, ...] = ()) -> None:
+    """The service's ceilings, configurable with SOFTEVO_MAX_* variables."""
+
+    def refuse(loc: list[str | int], message: str) -> None:
+        raise RequestError([*prefix, *loc], message)
+
+    if config.population > limits.max_population:
+        refuse(["population"], f"population: {config.population} is over the limit of "
+               f"{limits.max_population} (SOFTEVO_MAX_POPULATION)")  # fmt: skip
+    if config.generations > limits.max_generations:
+        refuse(["generations"], f"generations: {config.generations} is over the limit of "
+               f"{limits.max_generations} (SOFTEVO_MAX_GENERATIONS)")  # fmt: skip
+    voxels = math.prod(config.shape)
+    if voxels > limits.max_voxels:
+        refuse(["shape"], f"shape: {voxels} voxels is over the limit of {limits.max_voxels} "
+               "(SOFTEVO_MAX_VOXELS)")  # fmt: skip
+    if config.sim.duration > limits.max_duration:
+        refuse(["sim", "duration"], f"sim.duration: {config.sim.duration} s is over the limit "
+               f"of {limits.max_duration} s (SOFTEVO_MAX_DURATION)")  # fmt: skip
+    if config.sim.dt < limits.min_dt:
+        refuse(["sim", "dt"], f"sim.dt: {config.sim.dt} s is under the limit of "
+               f"{limits.min_dt} s (SOFTEVO_MIN_DT)")  # fmt: skip
+    evaluations = config.population * config.generations
+    if evaluations > limits.max_evaluations:
+        refuse(["generations"], f"population x generations = {evaluations} is over the limit "
+               f"of {limits.max_evaluations} (SOFTEVO_MAX_EVALUATIONS)")  # fmt: skip

@@ -1,0 +1,80 @@
+"""`softevo serve` and `softevo db upgrade`: the service's commands."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+
+def add_parsers(commands: Any) -> None:
+    serve = commands.add_parser(
+        "serve",
+        help="serve the REST API and drive runs (SQLite + in-process pool by default)",
+        description=(
+            "Serve the REST API (OpenAPI at /docs) and drive queued runs in this process. "
+            "Settings come from the environment: SOFTEVO_DATABASE_URL (default "
+            "sqlite:///softevo.db in the working directory, migrated on start), "
+            "SOFTEVO_REDIS_URL, SOFTEVO_API_TOKEN, SOFTEVO_MAX_RUNNING, SOFTEVO_WORKERS; "
+            "see the README."
+        ),
+    )
+    serve.add_argument("--host", default="127.0.0.1", help="address to bind (127.0.0.1)")
+    serve.add_argument("--port", type=int, default=8000, help="port (8000)")
+    serve.add_argument("--log-level", default="info", choices=["debug", "info", "warning", "error"])
+    serve.set_defaults(handler=serve_command)
+
+    db = commands.add_parser(
+        "db", help="database maintenance", description="Database maintenance commands."
+    )
+    db_commands = db.add_subparsers(dest="db_command", required=True, metavar="COMMAND")
+    upgrade = db_commands.add_parser(
+        "upgrade",
+        help="apply the migrations to SOFTEVO_DATABASE_URL",
+        description="Apply every Alembic migration to the database of SOFTEVO_DATABASE_URL.",
+    )
+    upgrade.add_argument("--url", help="database URL (default: SOFTEVO_DATABASE_URL)")
+    upgrade.set_defaults(handler=upgrade_command)
+
+
+def _settings(args: argparse.Namespace) -> Any:
+    from api.settings import Settings
+
+    try:
+        return Settings.from_env()
+    except ValueError as error:
+        args.parser.error(str(error))
+
+
+def serve_command(args: argparse.Namespace) -> int:
+    import logging
+
+    import uvicorn
+
+    from api.app import create_app
+
+    if not 0 < args.port < 65536:
+        args.parser.error(f"--port must be between 1 and 65535, got {args.port}")
+    settings = _settings(args)
+    logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
+    uvicorn.run(create_app(settings), host=args.host, port=args.port, log_level=args.log_level)
+    return 0
+
+
+def upgrade_command(args: argparse.Namespace) -> int:
+    from sqlalchemy.engine import make_url
+    from sqlalchemy.exc import SQLAlchemyError
+
+    from api.db import Database, current_revision, normalise_url
+    from softevo.cli import CommandError
+
+    url = args.url or _settings(args).database_url
+    try:
+        db = Database(url)
+        db.upgrade()
+        revision = current_revision(db.engine)
+        db.dispose()
+    except (SQLAlchemyError, ValueError) as error:
+        shown = make_url(normalise_url(url)).render_as_string(hide_password=True)
+        raise CommandError(f"{shown}: {str(error).splitlines()[0]}") from None
+    print(f"database at migration {revision}")
+    return 0
