@@ -45,7 +45,7 @@ class RunCreate(RunSettings):  # type: ignore[misc, valid-type]
 class SweepCreate(RunSettings):  # type: ignore[misc, valid-type]
     """One base config over many bounding boxes and seeds (default: the paper's nine, seeds 1-3)."""
 
-    shapes: list[Shape] = Field(default_factory=lambda: [list(s) for s in PAPER_NINE_SHAPES])
+    shapes: list[Shape] = Field(default_factory=lambda: list(PAPER_NINE_SHAPES))
     seeds: list[int] = Field(default_factory=lambda: [1, 2, 3])
 
 

@@ -68,7 +68,10 @@ def create_sweep(
 ) -> SweepPublic:
     """Queue one run per (bounding box, seed); every config is checked before any is queued."""
     request: dict[str, Any] = body.model_dump(exclude_unset=True, exclude={"shapes", "seeds"})
-    shapes, seeds = list(dict.fromkeys(body.shapes)), list(dict.fromkeys(body.seeds))
+    shapes, seeds = (
+        list(dict.fromkeys(tuple(s) for s in body.shapes)),
+        list(dict.fromkeys(body.seeds)),
+    )
     if not shapes:
         raise RequestError(["shapes"], "shapes: give at least one bounding box")
     if not seeds:
