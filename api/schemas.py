@@ -8,7 +8,7 @@ ceilings (`api.settings.Limits`).
 from __future__ import annotations
 
 from datetime import datetime
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, create_model
 
@@ -46,7 +46,9 @@ class SweepCreate(RunSettings):  # type: ignore[misc, valid-type]
     """One base config over many bounding boxes and seeds (default: the paper's nine, seeds 1-3)."""
 
     shapes: list[Shape] = Field(default_factory=lambda: list(PAPER_NINE_SHAPES))
-    seeds: list[int] = Field(default_factory=lambda: [1, 2, 3])
+    seeds: list[Annotated[int, Field(ge=0, le=2**63 - 1)]] = Field(
+        default_factory=lambda: [1, 2, 3]
+    )
 
 
 class RunProgress(BaseModel):

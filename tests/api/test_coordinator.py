@@ -1,0 +1,174 @@
+"""The coordinator and its storage on SQLite and PostgreSQL: the schema, exactly-once fitness,
+leases, a takeover after a coordinator stops answering, and the same curve as `softevo run`."""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+import pytest
+from alembic.autogenerate import compare_metadata
+from alembic.migration import MigrationContext
+from sqlalchemy import func, select
+from sqlalchemy.exc import IntegrityError
+
+from api import leases, storage
+from api.coordinator import Coordinator
+from api.db import Database
+from api.models import Base, Individual
+from core.config import resolve
+from core.evaluation import SerialEvaluator
+from core.evolution import Evolution
+from softevo.cli import main
+
+REQUEST = {"preset": "quick", "seed": 5, "population": 8, "generations": 4}
+
+
+def wait_status(db: Database, run_id: int, statuses: tuple[str, ...], timeout: float = 60) -> str:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        status = storage.get_run(db, run_id).status
+        if status in statuses:
+            return status
+        time.sleep(0.05)
+    raise AssertionError(f"run {run_id} is still {status}")
+
+
+def undisturbed_curve(request: dict[str, Any]) -> list[dict[str, Any]]:
+    evolution = Evolution.start(resolve(request))
+    evolution.run(SerialEvaluator())
+    return evolution.curve()
+
+
+def test_migrations_create_exactly_the_models_schema(db: Database) -> None:
+    with db.engine.connect() as connection:
+        differences = compare_metadata(MigrationContext.configure(connection), Base.metadata)
+    assert differences == []
+
+
+def test_a_second_row_for_an_individual_is_impossible(db: Database) -> None:
+    run = storage.create_run(db, resolve(REQUEST))
+    row = {"run_id": run.id, "generation": 0, "index": 0, "genome": {}, "genome_hash": "h",
+           "operator": "random", "parents": [], "status": "pending"}  # fmt: skip
+    with db.write() as session:
+        session.add(Individual(**row))
+    with pytest.raises(IntegrityError), db.write() as session:
+        session.add(Individual(**row))
+
+
+def test_lease_is_exclusive_until_it_expires(db: Database) -> None:
+    run = storage.create_run(db, resolve(REQUEST))
+    assert leases.candidates(db, 10) == [run.id]
+    assert leases.acquire(db, run.id, "a", 0.5)
+    assert not leases.acquire(db, run.id, "b", 0.5)
+    assert leases.candidates(db, 10) == []
+    assert leases.renew(db, run.id, "a", 0.5)
+    time.sleep(0.6)
+    assert leases.acquire(db, run.id, "b", 5)
+    assert not leases.renew(db, run.id, "a", 5)  # the old owner is fenced off
+    record = storage.get_run(db, run.id)
+    assert record.status == "running" and record.takeovers == 1
+
+
+class FreezingEvaluator(SerialEvaluator):
+    """Evaluates `calls` batches, then hangs like a stopped process until released."""
+
+    def __init__(self, calls: int) -> None:
+        self.calls = calls
+        self.release = threading.Event()
+
+    def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray:
+        self.calls -= 1
+        if self.calls < 0:
+            self.release.wait(60)
+        return super().evaluate(robot_files)
+
+
+def test_takeover_after_a_coordinator_freezes_gives_the_undisturbed_curve(db: Database) -> None:
+    run = storage.create_run(db, resolve(REQUEST))
+    frozen = FreezingEvaluator(calls=5)
+    first = Coordinator(db, frozen, batch_size=2, lease_seconds=1.0, poll_seconds=0.05)
+    first.start()
+    deadline = time.monotonic() + 60
+    while frozen.calls >= 0:
+        assert time.monotonic() < deadline
+        time.sleep(0.02)
+    first.stopping.set()  # the frozen coordinator stops heartbeating, as if SIGSTOPped
+    second = Coordinator(db, SerialEvaluator(), batch_size=2, lease_seconds=1.0, poll_seconds=0.05)
+    second.start()
+    try:
+        assert wait_status(db, run.id, ("completed", "failed")) == "completed"
+        frozen.release.set()  # its late batch must not write a second fitness
+        time.sleep(0.5)
+    finally:
+        second.stop()
+        first.stop()
+    record = storage.get_run(db, run.id)
+    assert record.takeovers >= 1 and record.error is None
+    with db.read() as session:
+        statuses = session.execute(
+            select(Individual.status, func.count()).where(Individual.run_id == run.id)
+            .group_by(Individual.status)
+        ).all()  # fmt: skip
+    assert "pending" not in dict(statuses)
+    assert sum(count for _, count in statuses) == 8 * 4
+    assert storage.curve(db, run.id) == undisturbed_curve(REQUEST)
+
+
+def test_service_curve_equals_softevo_run(
+    db: Database, tmp_path: Any, capsys: pytest.CaptureFixture[str]
+) -> None:
+    run = storage.create_run(db, resolve(REQUEST))
+    coordinator = Coordinator(db, SerialEvaluator(), batch_size=3, poll_seconds=0.05)
+    coordinator.start()
+    try:
+        assert wait_status(db, run.id, ("completed", "failed")) == "completed"
+    finally:
+        coordinator.stop()
+    argv = ["run", "--preset", "quick", "--seed", "5", "--population", "8", "--generations", "4",
+            "--workers", "1", "--json", "--out", str(tmp_path / "out")]  # fmt: skip
+    assert main(argv) == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert storage.curve(db, run.id) == printed["generations"]
+    record = storage.get_run(db, run.id)
+    assert record.evaluations == printed["evaluations"] and record.saved == printed["saved"]
+
+
+def test_a_failing_evaluator_fails_the_run_with_its_reason(db: Database) -> None:
+    class Broken(SerialEvaluator):
+        def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray:
+            raise RuntimeError("worker pool is gone")
+
+    run = storage.create_run(db, resolve(REQUEST))
+    coordinator = Coordinator(db, Broken(), poll_seconds=0.05)
+    coordinator.start()
+    try:
+        assert wait_status(db, run.id, ("completed", "failed")) == "failed"
+    finally:
+        coordinator.stop()
+    assert "worker pool is gone" in (storage.get_run(db, run.id).error or "")
+
+
+def test_failed_robots_are_nan_ranked_last_not_zero(db: Database) -> None:
+    class HalfFailing(SerialEvaluator):
+        def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray:
+            values = super().evaluate(robot_files)
+            values[::2] = np.nan
+            return values
+
+    run = storage.create_run(db, resolve(REQUEST))
+    coordinator = Coordinator(db, HalfFailing(), batch_size=8, poll_seconds=0.05)
+    coordinator.start()
+    try:
+        assert wait_status(db, run.id, ("completed", "failed")) == "completed"
+    finally:
+        coordinator.stop()
+    first = storage.curve(db, run.id)[0]
+    assert first["failed"] == 4 and first["min"] is not None and first["min"] > -1
+    items, _ = storage.list_individuals(db, storage.get_run(db, run.id), 0, 0, 100)
+    failed = [item for item in items if item["status"] == "failed"]
+    assert len(failed) == 4 and all(item["fitness"] is None for item in failed)
