@@ -13,8 +13,10 @@ COPY core ./core
 COPY api ./api
 COPY worker ./worker
 COPY softevo ./softevo
+COPY migrations ./migrations
 COPY examples ./examples
-RUN pip install . && chown -R softevo:softevo /app
+RUN pip install . && mkdir -p /data && chown -R softevo:softevo /app /data
 
 USER softevo
-CMD ["softevo", "--help"]
+EXPOSE 8000
+CMD ["softevo", "serve", "--host", "0.0.0.0", "--port", "8000"]

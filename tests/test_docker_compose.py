@@ -47,5 +47,18 @@ def test_dockerfile_runs_as_non_root_and_copies_every_package() -> None:
     dockerfile = (ROOT / "Dockerfile").read_text()
     users = [line.split()[1] for line in dockerfile.splitlines() if line.startswith("USER ")]
     assert users and users[-1] not in {"root", "0"}
-    for package in ("core", "api", "worker", "softevo", "examples"):
+    for package in ("core", "api", "worker", "softevo", "migrations", "examples"):
         assert f"COPY {package} " in dockerfile, f"Dockerfile does not copy {package}/"
+
+
+def test_only_the_api_publishes_a_port_and_it_is_the_one_it_serves() -> None:
+    services = load_compose()["services"]
+    published = {name for name, service in services.items() if service.get("ports")}
+    assert published == {"api"}
+    api = services["api"]
+    assert api["ports"] == ["8000:8000"]
+    assert api["command"][api["command"].index("--port") + 1] == "8000"
+    assert "--host" in api["command"] and "0.0.0.0" in api["command"]
+    assert "/healthz" in " ".join(api["healthcheck"]["test"])
+    assert api["environment"]["SOFTEVO_DATABASE_URL"].startswith("sqlite:////data/")
+    assert any(mount.endswith(":/data") for mount in api["volumes"])
