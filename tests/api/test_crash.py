@@ -1,0 +1,261 @@
+"""Crash and resume, for real: `softevo serve` is SIGKILLed in the middle of a generation, started
+again on the same SQLite file, takes the run over once its lease expires, and finishes it with
+exactly the learning curve of an undisturbed in-process run, each individual stored once.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import sqlite3
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterator
+from contextlib import closing
+from pathlib import Path
+from typing import Any
+
+import httpx
+import pytest
+
+from core.config import resolve
+from core.evaluation import SerialEvaluator
+from core.evolution import CURVE_COLUMNS, Evolution
+
+#: 3x3x3 robots simulated for 20 s: a batch of two takes ~0.2 s, so a generation (about eight new
+#: robots, four batches) lasts long enough to be caught between its first and last batch.
+REQUEST: dict[str, Any] = {
+    "preset": "quick",
+    "seed": 7,
+    "generations": 6,
+    "population": 16,
+    "sim": {"duration": 20.0},
+}
+GENERATIONS = REQUEST["generations"]
+POPULATION = REQUEST["population"]
+#: The server is killed in the first generation from KILL_AT on caught half evaluated; the last
+#: one is never a target, so the successor always has a whole generation after it to run.
+KILL_AT = 2
+LEASE_SECONDS = 2.0
+
+
+def _free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+class Server:
+    """One `softevo serve` process and a client for it; its output goes to a log file."""
+
+    def __init__(self, process: subprocess.Popen[bytes], url: str, log: Path) -> None:
+        self.process = process
+        self.client = httpx.Client(base_url=url, timeout=10.0)
+        self.log = log
+
+    def tail(self) -> str:
+        return self.log.read_text(errors="replace")[-4000:]
+
+    def kill(self) -> None:
+        if self.process.poll() is None:
+            os.kill(self.process.pid, signal.SIGKILL)
+        self.process.wait(timeout=10)
+        self.client.close()
+
+
+@pytest.fixture
+def start_server(tmp_path: Path) -> Iterator[Callable[[], Server]]:
+    """`start_server()`: serve the test's database on a free port; every server dies at the end."""
+    env = {
+        **os.environ,
+        "SOFTEVO_DATABASE_URL": f"sqlite:///{tmp_path / 'crash.db'}",
+        "SOFTEVO_LEASE_SECONDS": str(LEASE_SECONDS),
+        "SOFTEVO_POLL_SECONDS": "0.2",
+        "SOFTEVO_WORKERS": "1",
+        "SOFTEVO_BATCH_SIZE": "2",
+    }
+    servers: list[Server] = []
+
+    def start() -> Server:
+        port = _free_port()
+        log = tmp_path / f"server-{len(servers)}.log"
+        with log.open("wb") as out:
+            process = subprocess.Popen(
+                [sys.executable, "-m", "softevo.cli", "serve", "--port", str(port)],
+                env=env,
+                stdout=out,
+                stderr=subprocess.STDOUT,
+            )
+        server = Server(process, f"http://127.0.0.1:{port}", log)
+        servers.append(server)
+        deadline = time.monotonic() + 60
+        while True:
+            if process.poll() is not None:
+                pytest.fail(f"softevo serve exited with {process.returncode}:\n{server.tail()}")
+            try:
+                if server.client.get("/healthz").status_code == 200:
+                    return server
+            except httpx.TransportError:
+                pass
+            if time.monotonic() > deadline:
+                pytest.fail(f"softevo serve did not answer /healthz in 60 s:\n{server.tail()}")
+            time.sleep(0.1)
+
+    try:
+        yield start
+    finally:
+        for server in servers:
+            server.kill()
+
+
+def _individuals(client: httpx.Client, run_id: int, **params: int) -> list[dict[str, Any]]:
+    """Every individual (of one generation, if asked), page by page."""
+    items: list[dict[str, Any]] = []
+    while True:
+        page = client.get(
+            f"/runs/{run_id}/individuals", params={**params, "offset": len(items), "limit": 25}
+        )
+        assert page.status_code == 200, page.text
+        body = page.json()
+        items.extend(body["items"])
+        if not body["items"] or len(items) >= body["total"]:
+            assert len(items) == body["total"]
+            return items
+
+
+def _mid_generation(client: httpx.Client, run_id: int, generation: int, seen: set[str]) -> bool:
+    """`generation` has saved some fitness and still has new genomes (not in `seen`) to evaluate."""
+    items = _individuals(client, run_id, generation=generation)
+    done = {item["genome_hash"] for item in items if item["status"] in ("evaluated", "failed")}
+    todo = {
+        item["genome_hash"]
+        for item in items
+        if item["status"] == "pending" and item["genome_hash"] not in seen | done
+    }
+    return bool(done) and bool(todo)
+
+
+def _database_state(path: Path, run_id: int) -> dict[str, Any]:
+    """The run's status, generations committed, and the generation in progress by status."""
+    with closing(sqlite3.connect(path)) as connection:
+        status, committed = connection.execute(
+            "SELECT status, generations_done FROM runs WHERE id = ?", (run_id,)
+        ).fetchone()
+        counts = dict(
+            connection.execute(
+                "SELECT status, count(*) FROM individuals WHERE run_id = ? AND generation = ? "
+                "GROUP BY status",
+                (run_id, committed),
+            ).fetchall()
+        )
+    return {"status": status, "committed": committed, "in_progress": counts}
+
+
+def _saved_fitness(path: Path, run_id: int, generation: int) -> list[tuple[Any, ...]]:
+    """Fitness saved in `generation` so far: (index, status, fitness, worker, evaluated_at)."""
+    with closing(sqlite3.connect(path)) as connection:
+        return connection.execute(
+            'SELECT "index", status, fitness, worker, evaluated_at FROM individuals '
+            "WHERE run_id = ? AND generation = ? AND status IN ('evaluated', 'failed') "
+            'ORDER BY "index"',
+            (run_id, generation),
+        ).fetchall()
+
+
+@pytest.mark.slow
+def test_sigkill_mid_generation_then_restart_resumes_with_the_same_curve(
+    start_server: Callable[[], Server], tmp_path: Path
+) -> None:
+    database = tmp_path / "crash.db"
+    first = start_server()
+    created = first.client.post("/runs", json=REQUEST)
+    assert created.status_code == 201, created.text
+    run_id = created.json()["id"]
+
+    # Watch the run until a generation is half evaluated, then SIGKILL the server.
+    seen: dict[int, set[str]] = {}  # generations committed -> genomes of those generations
+    deadline = time.monotonic() + 60
+    while True:
+        assert time.monotonic() < deadline, f"never caught mid-generation:\n{first.tail()}"
+        run = first.client.get(f"/runs/{run_id}").json()
+        assert run["status"] in ("queued", "running"), run
+        committed = run["progress"]["generation"]
+        assert committed < GENERATIONS - 1, f"never caught mid-generation:\n{first.tail()}"
+        if committed >= KILL_AT:
+            if committed not in seen:
+                seen[committed] = {
+                    item["genome_hash"]
+                    for item in _individuals(first.client, run_id)
+                    if item["generation"] < committed
+                }
+            if _mid_generation(first.client, run_id, committed, seen[committed]):
+                break
+        time.sleep(0.02)
+    first.kill()
+
+    killed = _database_state(database, run_id)
+    print(f"\nkilled in: {killed}")
+    assert killed["status"] == "running"
+    assert killed["committed"] == committed, "the kill came after the generation was committed"
+    assert killed["in_progress"].get("pending", 0) > 0
+    assert killed["in_progress"].get("evaluated", 0) + killed["in_progress"].get("failed", 0) > 0
+    saved_before = _saved_fitness(database, run_id, committed)
+
+    # A new server takes the run over once the dead one's lease has expired, and finishes it.
+    restarted = time.monotonic()
+    second = start_server()
+    deadline = restarted + 120
+    while True:
+        run = second.client.get(f"/runs/{run_id}").json()
+        if run["status"] not in ("queued", "running"):
+            break
+        assert time.monotonic() < deadline, f"run not finished after restart:\n{second.tail()}"
+        time.sleep(0.1)
+    recovery = time.monotonic() - restarted
+    print(f"recovery: run completed {recovery:.2f} s after the restart (lease {LEASE_SECONDS} s)")
+    assert run["status"] == "completed", f"{run}\n{second.tail()}"
+    assert run["error"] is None
+    assert run["takeovers"] >= 1
+    assert run["progress"]["generation"] == GENERATIONS
+
+    # Exactly one row per (generation, index), none left pending.
+    individuals = _individuals(second.client, run_id)
+    assert len(individuals) == GENERATIONS * POPULATION
+    assert {(i["generation"], i["index"]) for i in individuals} == {
+        (g, i) for g in range(GENERATIONS) for i in range(POPULATION)
+    }
+    assert all(i["status"] in ("evaluated", "cached", "failed") for i in individuals)
+    with closing(sqlite3.connect(database)) as connection:
+        duplicates = connection.execute(
+            'SELECT run_id, generation, "index", count(*) FROM individuals '
+            'GROUP BY run_id, generation, "index" HAVING count(*) > 1'
+        ).fetchall()
+        pending = connection.execute(
+            "SELECT count(*) FROM individuals WHERE status = 'pending'"
+        ).fetchone()[0]
+        rows = connection.execute(
+            "SELECT count(*) FROM individuals WHERE run_id = ?", (run_id,)
+        ).fetchone()[0]
+        generation_rows = connection.execute(
+            "SELECT generation FROM generations WHERE run_id = ? ORDER BY generation", (run_id,)
+        ).fetchall()
+    assert duplicates == []
+    assert pending == 0
+    assert rows == GENERATIONS * POPULATION
+    assert [g for (g,) in generation_rows] == list(range(GENERATIONS))
+    # Fitness saved before the crash was kept as it was, not simulated and written again.
+    saved_after = {row[0]: row for row in _saved_fitness(database, run_id, committed)}
+    assert [saved_after.get(row[0]) for row in saved_before] == saved_before
+
+    # The learning curve is the undisturbed run's, to the last digit.
+    curve = second.client.get(f"/runs/{run_id}/curve").json()["generations"]
+    evolution = Evolution.start(resolve(REQUEST))
+    evolution.run(SerialEvaluator())
+    expected = evolution.curve()
+    assert len(curve) == len(expected) == GENERATIONS
+    for got, want in zip(curve, expected, strict=True):
+        assert {c: got[c] for c in CURVE_COLUMNS} == {c: want[c] for c in CURVE_COLUMNS}
+    assert run["progress"]["evaluations"] == evolution.evaluations
+    assert run["progress"]["saved"] == evolution.saved
