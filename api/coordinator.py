@@ -301,7 +301,6 @@ class RunDriver:
             if done:
                 run.status, run.finished_at = "completed", now()
                 run.lease_owner, run.lease_expires = None, None
-        self.coordinator.notify(self.run_id)
 
 
 class Coordinator:
@@ -334,7 +333,6 @@ class Coordinator:
         self._drivers: dict[int, tuple[RunDriver, threading.Thread]] = {}
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
-        self._listeners: list[threading.Event] = []
 
     # -- lifecycle -----------------------------------------------------------------------------
 
@@ -369,13 +367,6 @@ class Coordinator:
     def active(self) -> list[int]:
         with self._lock:
             return sorted(self._drivers)
-
-    def notify(self, run_id: int) -> None:
-        """A generation was committed (wakes server-sent event streams in this process)."""
-        with self._lock:
-            listeners = list(self._listeners)
-        for listener in listeners:
-            listener.set()
 
     # -- scheduling ----------------------------------------------------------------------------
 

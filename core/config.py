@@ -23,7 +23,8 @@ MAX_VOXELS = 1000
 CubeOption = tuple[float, float, float, float]
 #: The paper's nine bounding boxes (Figure 4a), in its order.
 PAPER_NINE_SHAPES: tuple[tuple[int, int, int], ...] = (
-    (3, 3, 6), (4, 4, 3), (4, 4, 4), (5, 5, 3), (5, 5, 4), (5, 5, 5), (6, 6, 3), (6, 6, 6), (9, 9, 2),
+    (3, 3, 6), (4, 4, 3), (4, 4, 4), (5, 5, 3), (5, 5, 4),
+    (5, 5, 5), (6, 6, 3), (6, 6, 6), (9, 9, 2),
 )  # fmt: skip
 
 

@@ -15,8 +15,10 @@ import itertools
 import math
 import multiprocessing
 import os
+import threading
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Protocol
 
 import numpy as np
@@ -86,21 +88,38 @@ class PoolEvaluator:
         self.min_chunk = max(1, min_chunk)
         if self.processes < 1:
             raise ValueError(f"processes must be >= 1, got {self.processes}")
-        self._pool = ProcessPoolExecutor(
+        self._lock = threading.Lock()
+        self._pool = self._new_pool()
+
+    def _new_pool(self) -> ProcessPoolExecutor:
+        return ProcessPoolExecutor(
             max_workers=self.processes,
             mp_context=multiprocessing.get_context("spawn"),
             initializer=warm_up,
         )
 
     def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray:
+        """Thread-safe. If a pool process dies (killed, out of memory), the pool is rebuilt and
+        the batch tried once more; a batch that kills its process twice raises."""
         files = list(robot_files)
         if not files:
             return np.empty(0)
         n_chunks = min(2 * self.processes, math.ceil(len(files) / self.min_chunk))
         bounds = np.linspace(0, len(files), n_chunks + 1).round().astype(int)
         chunks = [files[start:stop] for start, stop in itertools.pairwise(bounds)]
-        results = self._pool.map(evaluate_robot_files, chunks)
-        return _to_array([value for chunk in results for value in chunk])
+        for attempt in (1, 2):
+            pool = self._pool
+            try:
+                results = list(pool.map(evaluate_robot_files, chunks))
+                return _to_array([value for chunk in results for value in chunk])
+            except BrokenProcessPool:
+                if attempt == 2:
+                    raise
+                with self._lock:
+                    if self._pool is pool:  # the first thread to notice rebuilds it
+                        pool.shutdown(wait=False, cancel_futures=True)
+                        self._pool = self._new_pool()
+        raise AssertionError("unreachable")
 
     def close(self) -> None:
         self._pool.shutdown(wait=True, cancel_futures=True)

@@ -272,3 +272,30 @@ def test_health_reports_redis_down(make_client: Callable[..., TestClient]) -> No
     response = client.get("/healthz")
     assert response.status_code == 503
     assert response.json()["redis"].startswith("down")
+
+
+def test_readers_and_writers_never_fail_while_a_run_writes(
+    make_client: Callable[..., TestClient],
+) -> None:
+    """SQLite in WAL mode with BEGIN IMMEDIATE: no 'database is locked', no 5xx."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    client = make_client(batch_size=1, max_running=2)
+    run_id = start(client, generations=30)
+    paths = [f"/runs/{run_id}", f"/runs/{run_id}/curve", f"/runs/{run_id}/individuals", "/runs"]
+
+    def hammer(worker: int) -> list[int]:
+        codes = []
+        deadline = time.monotonic() + 3
+        while time.monotonic() < deadline:
+            codes.append(client.get(paths[worker % len(paths)]).status_code)
+            if worker == 0 and len(codes) % 20 == 0:  # a second writer, now and then
+                created = client.post("/runs", json={**SMALL, "generations": 1})
+                codes.append(created.status_code - 1 if created.status_code == 201 else 0)
+        return codes
+
+    with ThreadPoolExecutor(4) as pool:
+        codes = [code for result in pool.map(hammer, range(4)) for code in result]
+    assert len(codes) > 50 and set(codes) == {200}, sorted(set(codes))
+    assert client.get(f"/runs/{run_id}").json()["status"] in ("running", "completed")
+    client.post(f"/runs/{run_id}/cancel")
