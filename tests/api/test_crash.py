@@ -1,6 +1,7 @@
 """Crash and resume, for real: `softevo serve` is SIGKILLed in the middle of a generation, started
-again on the same SQLite file, takes the run over once its lease expires, and finishes it with
-exactly the learning curve of an undisturbed in-process run, each individual stored once.
+again on the same database (a SQLite file, then PostgreSQL), takes the run over once its lease
+expires, and finishes it with exactly the learning curve of an undisturbed in-process run, each
+individual stored once.
 """
 
 from __future__ import annotations
@@ -8,18 +9,18 @@ from __future__ import annotations
 import os
 import signal
 import socket
-import sqlite3
 import subprocess
 import sys
 import time
 from collections.abc import Callable, Iterator
-from contextlib import closing
 from pathlib import Path
 from typing import Any
 
 import httpx
 import pytest
+from sqlalchemy import Engine, create_engine, text
 
+from api.db import Database, normalise_url
 from core.config import resolve
 from core.evaluation import SerialEvaluator
 from core.evolution import CURVE_COLUMNS, Evolution
@@ -66,11 +67,20 @@ class Server:
 
 
 @pytest.fixture
-def start_server(tmp_path: Path) -> Iterator[Callable[[], Server]]:
+def engine(database_url: str) -> Iterator[Engine]:
+    """The test's database, migrated, for reading what the servers left in it."""
+    Database(database_url).upgrade()
+    engine = create_engine(normalise_url(database_url))
+    yield engine
+    engine.dispose()
+
+
+@pytest.fixture
+def start_server(database_url: str, tmp_path: Path) -> Iterator[Callable[[], Server]]:
     """`start_server()`: serve the test's database on a free port; every server dies at the end."""
     env = {
         **os.environ,
-        "SOFTEVO_DATABASE_URL": f"sqlite:///{tmp_path / 'crash.db'}",
+        "SOFTEVO_DATABASE_URL": database_url,
         "SOFTEVO_LEASE_SECONDS": str(LEASE_SECONDS),
         "SOFTEVO_POLL_SECONDS": "0.2",
         "SOFTEVO_WORKERS": "1",
@@ -137,38 +147,43 @@ def _mid_generation(client: httpx.Client, run_id: int, generation: int, seen: se
     return bool(done) and bool(todo)
 
 
-def _database_state(path: Path, run_id: int) -> dict[str, Any]:
+def _database_state(engine: Engine, run_id: int) -> dict[str, Any]:
     """The run's status, generations committed, and the generation in progress by status."""
-    with closing(sqlite3.connect(path)) as connection:
+    with engine.connect() as connection:
         status, committed = connection.execute(
-            "SELECT status, generations_done FROM runs WHERE id = ?", (run_id,)
-        ).fetchone()
+            text("SELECT status, generations_done FROM runs WHERE id = :run"), {"run": run_id}
+        ).one()
         counts = dict(
             connection.execute(
-                "SELECT status, count(*) FROM individuals WHERE run_id = ? AND generation = ? "
-                "GROUP BY status",
-                (run_id, committed),
-            ).fetchall()
+                text(
+                    "SELECT status, count(*) FROM individuals WHERE run_id = :run "
+                    "AND generation = :generation GROUP BY status"
+                ),
+                {"run": run_id, "generation": committed},
+            ).all()
         )
     return {"status": status, "committed": committed, "in_progress": counts}
 
 
-def _saved_fitness(path: Path, run_id: int, generation: int) -> list[tuple[Any, ...]]:
+def _saved_fitness(engine: Engine, run_id: int, generation: int) -> list[tuple[Any, ...]]:
     """Fitness saved in `generation` so far: (index, status, fitness, worker, evaluated_at)."""
-    with closing(sqlite3.connect(path)) as connection:
-        return connection.execute(
-            'SELECT "index", status, fitness, worker, evaluated_at FROM individuals '
-            "WHERE run_id = ? AND generation = ? AND status IN ('evaluated', 'failed') "
-            'ORDER BY "index"',
-            (run_id, generation),
-        ).fetchall()
+    with engine.connect() as connection:
+        rows = connection.execute(
+            text(
+                'SELECT "index", status, fitness, worker, evaluated_at FROM individuals '
+                "WHERE run_id = :run AND generation = :generation "
+                "AND status IN ('evaluated', 'failed') ORDER BY \"index\""
+            ),
+            {"run": run_id, "generation": generation},
+        ).all()
+        return [tuple(row) for row in rows]
 
 
 @pytest.mark.slow
 def test_sigkill_mid_generation_then_restart_resumes_with_the_same_curve(
-    start_server: Callable[[], Server], tmp_path: Path
+    start_server: Callable[[], Server], engine: Engine
 ) -> None:
-    database = tmp_path / "crash.db"
+    database = engine
     first = start_server()
     created = first.client.post("/runs", json=REQUEST)
     assert created.status_code == 201, created.text
@@ -227,20 +242,23 @@ def test_sigkill_mid_generation_then_restart_resumes_with_the_same_curve(
         (g, i) for g in range(GENERATIONS) for i in range(POPULATION)
     }
     assert all(i["status"] in ("evaluated", "cached", "failed") for i in individuals)
-    with closing(sqlite3.connect(database)) as connection:
+    with engine.connect() as connection:
         duplicates = connection.execute(
-            'SELECT run_id, generation, "index", count(*) FROM individuals '
-            'GROUP BY run_id, generation, "index" HAVING count(*) > 1'
-        ).fetchall()
-        pending = connection.execute(
-            "SELECT count(*) FROM individuals WHERE status = 'pending'"
-        ).fetchone()[0]
-        rows = connection.execute(
-            "SELECT count(*) FROM individuals WHERE run_id = ?", (run_id,)
-        ).fetchone()[0]
+            text(
+                'SELECT run_id, generation, "index", count(*) FROM individuals '
+                'GROUP BY run_id, generation, "index" HAVING count(*) > 1'
+            )
+        ).all()
+        pending = connection.scalar(
+            text("SELECT count(*) FROM individuals WHERE status = 'pending'")
+        )
+        rows = connection.scalar(
+            text("SELECT count(*) FROM individuals WHERE run_id = :run"), {"run": run_id}
+        )
         generation_rows = connection.execute(
-            "SELECT generation FROM generations WHERE run_id = ? ORDER BY generation", (run_id,)
-        ).fetchall()
+            text("SELECT generation FROM generations WHERE run_id = :run ORDER BY generation"),
+            {"run": run_id},
+        ).all()
     assert duplicates == []
     assert pending == 0
     assert rows == GENERATIONS * POPULATION
