@@ -5,9 +5,12 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 from fastapi.testclient import TestClient
+
+from softevo.cli import main
 
 SMALL = {"preset": "quick", "seed": 1, "population": 6, "generations": 3}
 
@@ -67,6 +70,21 @@ def test_run_lifecycle_and_results(client: TestClient) -> None:
     assert replay["fitness"] == run["progress"]["best_fitness"]
     assert len(replay["frames"]) >= 10 and replay["springs"]
     assert replay["speed"] == pytest.approx(replay["fitness"], rel=1e-9)
+
+
+def test_a_run_through_the_api_has_the_curve_of_softevo_run(
+    client: TestClient, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    run_id = start(client, seed=5, population=8, generations=4)
+    run = wait_for(client, run_id, ("completed",))
+    argv = ["run", "--preset", "quick", "--seed", "5", "--population", "8", "--generations", "4",
+            "--workers", "1", "--json", "--out", str(tmp_path / "out")]  # fmt: skip
+    assert main(argv) == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert client.get(f"/runs/{run_id}/curve").json()["generations"] == printed["generations"]
+    assert run["progress"]["evaluations"] == printed["evaluations"]
+    assert run["progress"]["saved"] == printed["saved"]
+    assert client.get(f"/runs/{run_id}/best").json() == printed["best"]["robot"]
 
 
 def test_events_stream_one_per_generation_then_end(client: TestClient) -> None:

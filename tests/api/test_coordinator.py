@@ -1,9 +1,9 @@
 """The coordinator and its storage on SQLite and PostgreSQL: the schema, exactly-once fitness,
-leases, a takeover after a coordinator stops answering, and the same curve as `softevo run`."""
+leases, and a takeover after a coordinator stops answering that ends with the undisturbed curve.
+(The same curve as `softevo run` is checked through the API in `test_api.py`.)"""
 
 from __future__ import annotations
 
-import json
 import threading
 import time
 from collections.abc import Sequence
@@ -23,7 +23,6 @@ from api.models import Base, Individual
 from core.config import resolve
 from core.evaluation import SerialEvaluator
 from core.evolution import Evolution
-from softevo.cli import main
 
 REQUEST = {"preset": "quick", "seed": 5, "population": 8, "generations": 4}
 
@@ -36,6 +35,16 @@ def wait_status(db: Database, run_id: int, statuses: tuple[str, ...], timeout: f
             return status
         time.sleep(0.05)
     raise AssertionError(f"run {run_id} is still {status}")
+
+
+def drive(db: Database, run_id: int, evaluator: SerialEvaluator, **options: Any) -> str:
+    """Run a coordinator until `run_id` stops; its final status."""
+    coordinator = Coordinator(db, evaluator, poll_seconds=0.05, **options)
+    coordinator.start()
+    try:
+        return wait_status(db, run_id, ("completed", "failed"))
+    finally:
+        coordinator.stop()
 
 
 def undisturbed_curve(request: dict[str, Any]) -> list[dict[str, Any]]:
@@ -119,37 +128,13 @@ def test_takeover_after_a_coordinator_freezes_gives_the_undisturbed_curve(db: Da
     assert storage.curve(db, run.id) == undisturbed_curve(REQUEST)
 
 
-def test_service_curve_equals_softevo_run(
-    db: Database, tmp_path: Any, capsys: pytest.CaptureFixture[str]
-) -> None:
-    run = storage.create_run(db, resolve(REQUEST))
-    coordinator = Coordinator(db, SerialEvaluator(), batch_size=3, poll_seconds=0.05)
-    coordinator.start()
-    try:
-        assert wait_status(db, run.id, ("completed", "failed")) == "completed"
-    finally:
-        coordinator.stop()
-    argv = ["run", "--preset", "quick", "--seed", "5", "--population", "8", "--generations", "4",
-            "--workers", "1", "--json", "--out", str(tmp_path / "out")]  # fmt: skip
-    assert main(argv) == 0
-    printed = json.loads(capsys.readouterr().out)
-    assert storage.curve(db, run.id) == printed["generations"]
-    record = storage.get_run(db, run.id)
-    assert record.evaluations == printed["evaluations"] and record.saved == printed["saved"]
-
-
 def test_a_failing_evaluator_fails_the_run_with_its_reason(db: Database) -> None:
     class Broken(SerialEvaluator):
         def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray:
             raise RuntimeError("worker pool is gone")
 
     run = storage.create_run(db, resolve(REQUEST))
-    coordinator = Coordinator(db, Broken(), poll_seconds=0.05)
-    coordinator.start()
-    try:
-        assert wait_status(db, run.id, ("completed", "failed")) == "failed"
-    finally:
-        coordinator.stop()
+    assert drive(db, run.id, Broken()) == "failed"
     assert "worker pool is gone" in (storage.get_run(db, run.id).error or "")
 
 
@@ -161,12 +146,7 @@ def test_failed_robots_are_nan_ranked_last_not_zero(db: Database) -> None:
             return values
 
     run = storage.create_run(db, resolve(REQUEST))
-    coordinator = Coordinator(db, HalfFailing(), batch_size=8, poll_seconds=0.05)
-    coordinator.start()
-    try:
-        assert wait_status(db, run.id, ("completed", "failed")) == "completed"
-    finally:
-        coordinator.stop()
+    assert drive(db, run.id, HalfFailing(), batch_size=8) == "completed"
     first = storage.curve(db, run.id)[0]
     assert first["failed"] == 4 and first["min"] is not None and first["min"] > -1
     items, _ = storage.list_individuals(db, storage.get_run(db, run.id), 0, 0, 100)
