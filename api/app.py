@@ -7,15 +7,20 @@ which takes over any run whose lease has expired. On stop: hand the runs back at
 
 from __future__ import annotations
 
+import gc
 import logging
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
+from typing import Any
 
 from alembic.script import ScriptDirectory
 from fastapi import FastAPI, Request
+from fastapi.exception_handlers import http_exception_handler
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
+from fastapi.routing import APIRoute
 from sqlalchemy.exc import InterfaceError, OperationalError
+from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from api import storage
 from api.coordinator import Coordinator
@@ -66,6 +71,10 @@ def create_app(
         )
         app.state.settings, app.state.db, app.state.coordinator = settings, db, coordinator
         coordinator.start()
+        # What start-up loaded stays for the life of the process: keep it out of the cyclic
+        # collector's full passes, which otherwise add ~100 ms to a large response now and then
+        # (BENCHMARKS.md, API latency).
+        gc.freeze()
         try:
             yield
         finally:
@@ -112,6 +121,19 @@ def _install_error_handlers(app: FastAPI) -> None:
     async def database_away(_request: Request, error: Exception) -> JSONResponse:
         log.warning("database unavailable: %s", type(error).__name__)
         return JSONResponse({"detail": "database unavailable, try again"}, status_code=503)
+
+    @app.exception_handler(StarletteHTTPException)
+    async def http_error(request: Request, error: StarletteHTTPException) -> Any:
+        if error.status_code == 405:  # Starlette lists only the first matching route's methods
+            path = request.url.path
+            methods = {
+                method
+                for route in request.app.router.routes
+                if isinstance(route, APIRoute) and route.path_regex.match(path)
+                for method in route.methods
+            }
+            error.headers = {**(error.headers or {}), "Allow": ", ".join(sorted(methods))}
+        return await http_exception_handler(request, error)
 
     @app.exception_handler(Exception)
     async def internal(_request: Request, error: Exception) -> JSONResponse:

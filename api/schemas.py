@@ -12,10 +12,11 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, create_model
 
-from core.config import PAPER_NINE_SHAPES
+from core.config import MAX_SIDE, PAPER_NINE_SHAPES
 from core.ga.algorithm import GAConfig
 
-Shape = tuple[int, int, int]
+Side = Annotated[int, Field(ge=1, le=MAX_SIDE)]
+Shape = tuple[Side, Side, Side]
 
 
 class _RunSettings(BaseModel):
@@ -27,9 +28,12 @@ class _RunSettings(BaseModel):
     cube_options: list[tuple[float, float, float, float]] | None = None
 
 
-#: Every GA setting, optional (None: the preset's value).
+#: Every GA setting, optional (None: the preset's value), with its bounds in the schema.
 _GA_FIELDS: dict[str, Any] = {
-    name: (info.annotation | None, Field(None, description=info.description))
+    name: (
+        (Annotated[info.annotation, *info.metadata] if info.metadata else info.annotation) | None,
+        Field(None, description=info.description),
+    )
     for name, info in GAConfig.model_fields.items()
 }
 RunSettings = create_model("RunSettings", __base__=_RunSettings, **_GA_FIELDS)
@@ -45,9 +49,11 @@ class RunCreate(RunSettings):  # type: ignore[misc, valid-type]
 class SweepCreate(RunSettings):  # type: ignore[misc, valid-type]
     """One base config over many bounding boxes and seeds (default: the paper's nine, seeds 1-3)."""
 
-    shapes: list[Shape] = Field(default_factory=lambda: list(PAPER_NINE_SHAPES))
+    shapes: list[Shape] = Field(
+        default_factory=lambda: list(PAPER_NINE_SHAPES), min_length=1, max_length=1000
+    )
     seeds: list[Annotated[int, Field(ge=0, le=2**63 - 1)]] = Field(
-        default_factory=lambda: [1, 2, 3]
+        default_factory=lambda: [1, 2, 3], min_length=1, max_length=1000
     )
 
 

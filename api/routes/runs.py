@@ -32,6 +32,8 @@ from core.robot_file import robot_to_json
 router = APIRouter(prefix="/runs", tags=["runs"])
 RunId = Annotated[int, Path(ge=1, le=2**31 - 1, description="run id")]
 NOT_FOUND: dict[int | str, dict[str, Any]] = {404: {"model": Message}}
+#: FastAPI answers 400 to a body it cannot decode (not UTF-8); invalid JSON text is a 422.
+BAD_BODY: dict[int | str, dict[str, Any]] = {400: {"model": Message}}
 
 
 def run_public(db: storage.Database, run: storage.RunRecord) -> RunPublic:
@@ -71,7 +73,7 @@ def run_public(db: storage.Database, run: storage.RunRecord) -> RunPublic:
     "",
     status_code=status.HTTP_201_CREATED,
     dependencies=[TokenDep],
-    responses={401: {"model": Message}, 403: {"model": Message}},
+    responses={**BAD_BODY, 401: {"model": Message}, 403: {"model": Message}},
 )
 def create_run(
     body: Annotated[RunCreate, Body()],
@@ -207,7 +209,7 @@ def get_best(run_id: RunId, db: DatabaseDep) -> dict[str, Any]:
 def get_replay(
     run_id: RunId,
     db: DatabaseDep,
-    fps: Annotated[float, Query(gt=0, le=120)] = 30.0,
+    fps: Annotated[float, Query(ge=0.1, le=120)] = 30.0,
 ) -> dict[str, Any]:
     """Frames of mass positions (and the springs) of the best robot, for a 3D viewer."""
     from core.physics import simulate  # the physics is loaded only when a replay is asked for

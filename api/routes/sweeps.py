@@ -9,6 +9,7 @@ from fastapi import APIRouter, Body, Path, Response, status
 
 from api import storage
 from api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TokenDep
+from api.routes.runs import BAD_BODY
 from api.schemas import Message, SweepBox, SweepCreate, SweepPublic
 from api.validation import RequestError, run_config
 
@@ -57,7 +58,7 @@ def sweep_public(db: storage.Database, sweep_id: int) -> SweepPublic:
     "",
     status_code=status.HTTP_201_CREATED,
     dependencies=[TokenDep],
-    responses={401: {"model": Message}, 403: {"model": Message}},
+    responses={**BAD_BODY, 401: {"model": Message}, 403: {"model": Message}},
 )
 def create_sweep(
     body: Annotated[SweepCreate, Body()],
@@ -72,10 +73,6 @@ def create_sweep(
         list(dict.fromkeys(tuple(s) for s in body.shapes)),
         list(dict.fromkeys(body.seeds)),
     )
-    if not shapes:
-        raise RequestError(["shapes"], "shapes: give at least one bounding box")
-    if not seeds:
-        raise RequestError(["seeds"], "seeds: give at least one seed")
     if len(shapes) * len(seeds) > settings.limits.max_sweep_runs:
         raise RequestError(["seeds"], f"{len(shapes)} boxes x {len(seeds)} seeds is over the "
                            f"limit of {settings.limits.max_sweep_runs} runs per sweep "

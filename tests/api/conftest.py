@@ -8,53 +8,34 @@ they skip on a laptop, but under CI=true a missing PostgreSQL fails them.
 from __future__ import annotations
 
 import os
-import uuid
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
 from fastapi.testclient import TestClient
-from sqlalchemy import create_engine, text
-from sqlalchemy.engine import make_url
 
 from api.app import create_app
-from api.db import Database, normalise_url
+from api.db import Database, scratch_postgres
 from api.settings import Settings
 from core.evaluation import SerialEvaluator
 
 POSTGRES = os.environ.get("SOFTEVO_TEST_POSTGRES", "postgresql://postgres@127.0.0.1:5432/test")
 
 
-def _admin_engine():  # type: ignore[no-untyped-def]
-    return create_engine(normalise_url(POSTGRES), isolation_level="AUTOCOMMIT")
-
-
 @pytest.fixture
 def postgres_url() -> Iterator[str]:
     """A fresh, empty PostgreSQL database for one test."""
-    name = f"softevo_test_{uuid.uuid4().hex[:12]}"
     try:
-        admin = _admin_engine()
-        with admin.connect() as connection:
-            connection.execute(text(f'CREATE DATABASE "{name}"'))
+        scratch = scratch_postgres(POSTGRES, "softevo_test")
+        url = scratch.__enter__()
     except Exception as error:
         if os.environ.get("CI") == "true":
             pytest.fail(f"PostgreSQL is needed under CI and is not reachable: {error}")
         pytest.skip(f"no PostgreSQL at {POSTGRES}: {type(error).__name__}")
-    url = make_url(normalise_url(POSTGRES)).set(database=name).render_as_string(False)
     try:
         yield url
     finally:
-        with admin.connect() as connection:
-            connection.execute(
-                text(
-                    "SELECT pg_terminate_backend(pid) FROM pg_stat_activity "
-                    "WHERE datname = :name AND pid <> pg_backend_pid()"
-                ),
-                {"name": name},
-            )
-            connection.execute(text(f'DROP DATABASE IF EXISTS "{name}"'))
-        admin.dispose()
+        scratch.__exit__(None, None, None)
 
 
 @pytest.fixture(params=["sqlite", pytest.param("postgres", marks=pytest.mark.postgres)])
