@@ -21,6 +21,11 @@ def add_parsers(commands: Any) -> None:
     serve.add_argument("--host", default="127.0.0.1", help="address to bind (127.0.0.1)")
     serve.add_argument("--port", type=int, default=8000, help="port (8000)")
     serve.add_argument("--log-level", default="info", choices=["debug", "info", "warning", "error"])
+    serve.add_argument(
+        "--migrate",
+        action="store_true",
+        help="apply the database migrations first (as `softevo db upgrade`), then serve",
+    )
     serve.set_defaults(handler=serve_command)
 
     db = commands.add_parser(
@@ -55,6 +60,8 @@ def serve_command(args: argparse.Namespace) -> int:
     if not 0 < args.port < 65536:
         args.parser.error(f"--port must be between 1 and 65535, got {args.port}")
     settings = _settings(args)
+    if args.migrate:
+        upgrade_command(argparse.Namespace(url=settings.database_url, parser=args.parser))
     logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
     uvicorn.run(create_app(settings), host=args.host, port=args.port, log_level=args.log_level)
     return 0
