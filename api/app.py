@@ -28,7 +28,7 @@ from api.db import Database, alembic_config, current_revision
 from api.routes import meta, runs, sweeps
 from api.settings import Settings, get_settings
 from api.validation import RequestError
-from core.evaluation import Evaluator, make_evaluator
+from core.evaluator import Evaluator
 
 log = logging.getLogger("softevo.api")
 
@@ -46,6 +46,18 @@ def check_migrated(db: Database) -> None:
         )
 
 
+def default_evaluator(settings: Settings) -> Evaluator:
+    """RQ workers when SOFTEVO_REDIS_URL is set (this process then never loads the physics),
+    otherwise a pool of local processes."""
+    if settings.redis_url:
+        from worker.evaluator import RQEvaluator
+
+        return RQEvaluator(settings.redis_url, concurrency=settings.queued_batches)
+    from core.evaluation import make_evaluator
+
+    return make_evaluator(settings.workers, min_chunk=settings.batch_size)
+
+
 def create_app(
     settings: Settings | None = None,
     evaluator_factory: Callable[[Settings], Evaluator] | None = None,
@@ -59,8 +71,7 @@ def create_app(
             db.upgrade()
         else:
             check_migrated(db)
-        factory = evaluator_factory or (lambda s: make_evaluator(s.workers, min_chunk=s.batch_size))
-        evaluator = factory(settings)
+        evaluator = (evaluator_factory or default_evaluator)(settings)
         coordinator = Coordinator(
             db,
             evaluator,

@@ -35,7 +35,7 @@ from api.db import Database
 from api.models import Generation, Individual, Run
 from api.storage import now
 from core.config import RunConfig
-from core.evaluation import Evaluator
+from core.evaluator import BatchResult, Evaluator, batch_digest
 from core.ga.algorithm import GAState, GeneticAlgorithm
 from core.ga.algorithm import Individual as GAIndividual
 from core.ga.stats import GenerationStats
@@ -203,31 +203,31 @@ class RunDriver:
         batches = [list(todo[i : i + size]) for i in range(0, len(todo), size)]
         executor = ThreadPoolExecutor(max_workers=c.parallel_batches, thread_name_prefix="batch")
         try:
-            futures: dict[Future, tuple[list[int], float]] = {}
+            futures: dict[Future[BatchResult], list[int]] = {}
             for batch in batches:
                 files = [
                     robot_to_json(encoding.to_robot(individuals[i].genome, config.sim))
                     for i in batch
                 ]
-                futures[executor.submit(c.evaluator.evaluate, files)] = (batch, time.perf_counter())
+                key = f"run{self.run_id}-gen{generation}-{batch_digest(files)}"
+                futures[executor.submit(c.evaluator.evaluate_batch, files, key)] = batch
             pending = set(futures)
             while pending:
                 self._check()
                 done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
                 for future in done:
-                    batch, submitted = futures[future]
-                    values = np.asarray(future.result(), dtype=np.float64)
-                    seconds = (time.perf_counter() - submitted) / len(batch)
-                    self._save_fitness(generation, batch, values, seconds)
+                    batch, result = futures[future], future.result()
+                    values = np.asarray(result.fitness, dtype=np.float64)
+                    self._save_fitness(generation, batch, values, result)
                     results.update(zip(batch, values.tolist(), strict=True))
         finally:
             executor.shutdown(wait=False, cancel_futures=True)
         return results
 
     def _save_fitness(
-        self, generation: int, batch: list[int], values: np.ndarray, seconds: float
+        self, generation: int, batch: list[int], values: np.ndarray, result: BatchResult
     ) -> None:
-        worker = self.coordinator.worker_name
+        seconds = result.seconds / max(1, len(batch))
         with self.db.write() as session:
             self._fenced(session)
             for index, value in zip(batch, values.tolist(), strict=True):
@@ -243,7 +243,7 @@ class RunDriver:
                         fitness=_or_none(value),
                         status="evaluated" if math.isfinite(value) else "failed",
                         eval_seconds=seconds,
-                        worker=worker,
+                        worker=result.worker[:128],
                         evaluated_at=now(),
                     )
                 )
@@ -316,18 +316,16 @@ class Coordinator:
         parallel_batches: int | None = None,
         lease_seconds: float = 15.0,
         poll_seconds: float = 0.5,
-        worker_name: str | None = None,
     ) -> None:
         self.db = db
         self.evaluator = evaluator
         self.max_running = max_running
         self.batch_size = batch_size
-        self.parallel_batches = parallel_batches or getattr(evaluator, "processes", 1)
+        self.parallel_batches = parallel_batches or max(1, evaluator.concurrency)
         self.settings_lease = lease_seconds
         self.poll_seconds = poll_seconds
         host = socket.gethostname()
         self.owner = f"{host}:{os.getpid()}:{uuid.uuid4().hex[:8]}"
-        self.worker_name = worker_name or f"{type(evaluator).__name__}@{host}"
         self.stopping = threading.Event()
         self._wake = threading.Event()
         self._drivers: dict[int, tuple[RunDriver, threading.Thread]] = {}

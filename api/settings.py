@@ -37,6 +37,7 @@ class Settings:
     max_running: int = 2  # runs driven at once by this process; the rest wait, queued
     workers: int | None = None  # in-process pool size (default: one per core)
     batch_size: int = 4  # robots per evaluator call; fitness is saved batch by batch
+    queued_batches: int = 64  # with RQ: batches of one run in flight at once
     lease_seconds: float = 15.0  # a coordinator that stops heartbeating loses its runs after this
     poll_seconds: float = 0.5  # how often the scheduler looks for queued or orphaned runs
     limits: Limits = field(default_factory=Limits)
@@ -58,7 +59,7 @@ class Settings:
             if raw is not None and raw != "":
                 limits[item.name] = _parse(f"SOFTEVO_{item.name.upper()}", raw, item.type)
         settings = cls(**values, limits=Limits(**limits))  # type: ignore[arg-type]
-        for name in ("max_running", "batch_size"):
+        for name in ("max_running", "batch_size", "queued_batches"):
             if getattr(settings, name) < 1:
                 raise ValueError(f"SOFTEVO_{name.upper()}: must be >= 1")
         if settings.workers is not None and settings.workers < 1:

@@ -17,7 +17,7 @@ from sqlalchemy import func, select, update
 from api.db import Database
 from api.models import ACTIVE_STATUSES, Generation, Individual, Run, Sweep
 from core.config import RunConfig
-from core.evolution import CURVE_COLUMNS
+from core.ga.stats import CURVE_COLUMNS
 
 
 def now() -> datetime:

@@ -1,7 +1,6 @@
-"""Evaluators: one narrow interface, `evaluate(robot_files) -> fitness array`, several backends.
+"""The in-process evaluators (serial, local process pool) and the job function every backend runs.
 
-The genetic algorithm and the coordinator only see `Evaluator`; whether robots are simulated in
-this process, in a local process pool or (later) by RQ workers is the backend's business. Payloads
+The interface is `core.evaluator.Evaluator`; RQ workers (`worker/`) are the other backend. Payloads
 are plain data (robot-file dicts, `softevo.robot/1`), never live objects, and a robot's fitness
 does not depend on which batch, process or machine simulated it (the kernels are bit-identical
 across batches), so every backend gives the same learning curve.
@@ -15,26 +14,21 @@ import itertools
 import math
 import multiprocessing
 import os
+import socket
 import threading
+import time
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 
+from core.evaluator import BatchResult, Evaluator
 from core.physics import simulate, simulate_batch
 from core.robot import Robot, VoxelRobot
 from core.robot_file import RobotFileError, parse_robot
 from core.settings import sim_settings
-
-
-class Evaluator(Protocol):
-    """Simulates a batch of robots that share one simulation setting; returns speeds (m/s)."""
-
-    def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray: ...
-
-    def close(self) -> None: ...
 
 
 def evaluate_robot_files(robot_files: Sequence[dict[str, Any]]) -> list[float | None]:
@@ -58,8 +52,25 @@ def _to_array(values: Sequence[float | None]) -> np.ndarray:
     return np.array([math.nan if v is None else v for v in values], dtype=np.float64)
 
 
-class SerialEvaluator:
-    """Everything in the calling process, one batch."""
+class _Timed:
+    """`evaluate_batch` for the in-process backends: `evaluate`, timed, named by host."""
+
+    def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray:
+        raise NotImplementedError
+
+    def evaluate_batch(
+        self, robot_files: Sequence[dict[str, Any]], key: str | None = None
+    ) -> BatchResult:
+        started = time.perf_counter()
+        fitness = self.evaluate(robot_files)
+        name = f"{type(self).__name__}@{socket.gethostname()}"
+        return BatchResult(fitness, name, time.perf_counter() - started)
+
+
+class SerialEvaluator(_Timed):
+    """Everything in the calling process, one batch at a time."""
+
+    concurrency = 1
 
     def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray:
         return _to_array(evaluate_robot_files(list(robot_files)))
@@ -75,7 +86,7 @@ def warm_up() -> None:
     simulate(robot)
 
 
-class PoolEvaluator:
+class PoolEvaluator(_Timed):
     """A local pool of worker processes (default: one per core), each warmed up once.
 
     A batch is cut into contiguous chunks, about two per process so a slow chunk does not leave
@@ -85,6 +96,7 @@ class PoolEvaluator:
 
     def __init__(self, processes: int | None = None, min_chunk: int = 1) -> None:
         self.processes = processes or os.cpu_count() or 1
+        self.concurrency = self.processes
         self.min_chunk = max(1, min_chunk)
         if self.processes < 1:
             raise ValueError(f"processes must be >= 1, got {self.processes}")

@@ -16,17 +16,11 @@ from typing import Any
 import numpy as np
 
 from core.config import RunConfig
-from core.evaluation import Evaluator
+from core.evaluator import Evaluator
 from core.ga.algorithm import GeneticAlgorithm, Individual
-from core.ga.stats import GenerationStats
+from core.ga.stats import CURVE_COLUMNS, GenerationStats
 from core.robot import Robot
 from core.robot_file import robot_to_json
-
-#: The learning-curve columns of the public contract, in order.
-CURVE_COLUMNS = (
-    "generation", "best", "mean", "median", "min", "best_so_far", "diversity", "evaluations",
-    "saved", "failed", "std",
-)  # fmt: skip
 
 
 @dataclass

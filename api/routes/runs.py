@@ -25,7 +25,7 @@ from api.schemas import (
 )
 from api.validation import run_config
 from core.config import RunConfig
-from core.evolution import CURVE_COLUMNS
+from core.ga.stats import CURVE_COLUMNS
 from core.genome import Genome
 from core.robot_file import robot_to_json
 

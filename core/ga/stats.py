@@ -16,6 +16,12 @@ import numpy as np
 
 from core.genome import Genome
 
+#: The learning-curve columns of the public contract, in order.
+CURVE_COLUMNS = (
+    "generation", "best", "mean", "median", "min", "best_so_far", "diversity", "evaluations",
+    "saved", "failed", "std",
+)  # fmt: skip
+
 
 @dataclass(frozen=True)
 class GenerationStats:
