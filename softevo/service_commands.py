@@ -28,6 +28,30 @@ def add_parsers(commands: Any) -> None:
     )
     serve.set_defaults(handler=serve_command)
 
+    worker = commands.add_parser(
+        "worker",
+        help="evaluate robots for the service: an RQ worker on SOFTEVO_REDIS_URL",
+        description=(
+            "Start an RQ worker that loads the physics kernels first, then evaluates batches of "
+            "robots for every softevo API that shares its Redis (SOFTEVO_REDIS_URL, or --url). "
+            "Start as many as there are cores, on any machine that reaches that Redis."
+        ),
+    )
+    worker.add_argument("--url", help="Redis URL (default: SOFTEVO_REDIS_URL)")
+    worker.add_argument("--burst", action="store_true", help="exit once the queue is empty")
+    worker.add_argument("--name", help="worker name (default: host.pid.random)")
+    worker.add_argument(
+        "--worker-class",
+        choices=["fork", "simple"],
+        default="fork",
+        help="fork (default): each job in a child of the warm worker, killed if it runs away; "
+        "simple: in the worker itself (no hard time limit)",
+    )
+    worker.add_argument(
+        "--log-level", default="info", choices=["debug", "info", "warning", "error"]
+    )
+    worker.set_defaults(handler=worker_command)
+
     db = commands.add_parser(
         "db", help="database maintenance", description="Database maintenance commands."
     )
@@ -84,4 +108,29 @@ def upgrade_command(args: argparse.Namespace) -> int:
         shown = make_url(normalise_url(url)).render_as_string(hide_password=True)
         raise CommandError(f"{shown}: {str(error).splitlines()[0]}") from None
     print(f"database at migration {revision}")
+    return 0
+
+
+def worker_command(args: argparse.Namespace) -> int:
+    import logging
+
+    from redis.exceptions import RedisError
+
+    from softevo.cli import CommandError
+    from worker.process import run_worker
+
+    url = args.url or _settings(args).redis_url
+    if not url:
+        raise CommandError("no Redis to work for: set SOFTEVO_REDIS_URL or give --url")
+    logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
+    try:
+        run_worker(
+            url,
+            burst=args.burst,
+            name=args.name,
+            worker_class=args.worker_class,
+            log_level=args.log_level.upper(),
+        )
+    except (RedisError, ValueError) as error:
+        raise CommandError(f"{url}: {str(error).splitlines()[0]}") from None
     return 0

@@ -1,0 +1,176 @@
+"""The RQ backend of the evaluator interface: batches become jobs on Redis, RQ workers on any
+machine run them, and this side owns completion.
+
+* A batch's job id is derived from its key (run, generation, content digest) and attempt, and
+  every attempt pushes its result onto the same list: the first result wins, a late duplicate is
+  never read twice, and the database accepts one fitness per individual anyway.
+* A started job whose result has not come back within a deadline (from the measured time per
+  robot, not a fixed number) is presumed lost with its worker and enqueued again; a job that
+  vanished (Redis restarted without persistence) is enqueued again; while Redis is away, this
+  side waits and retries. RQ's own abandoned-job detection is not relied on.
+* A batch whose job raised, or that ran out of attempts, is retried robot by robot, so only the
+  robot that fails is marked failed (NaN), once; it never loops.
+
+Only redis, rq and numpy are imported here: the API process enqueues without loading the physics.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+import threading
+import time
+from collections.abc import Sequence
+from datetime import UTC, datetime
+from typing import Any
+
+import numpy as np
+from redis.exceptions import ConnectionError as RedisConnectionError
+from redis.exceptions import TimeoutError as RedisTimeoutError
+from rq import Queue
+from rq.exceptions import NoSuchJobError
+from rq.job import Job, JobStatus
+
+from core.evaluator import BatchResult, batch_digest
+from worker.queue import JOB_FUNCTION, QUEUE, SERIALIZER, connect, result_key
+
+log = logging.getLogger("softevo.rq")
+REDIS_DOWN = (RedisConnectionError, RedisTimeoutError, ConnectionError, OSError)
+
+
+class RQEvaluator:
+    """Evaluates batches on RQ workers; thread-safe, `concurrency` batches in flight."""
+
+    def __init__(
+        self,
+        redis_url: str,
+        *,
+        concurrency: int = 64,
+        queue: str = QUEUE,
+        deadline_factor: float = 4.0,
+        min_deadline: float = 5.0,
+        initial_deadline: float = 30.0,
+        max_attempts: int = 3,
+        poll_seconds: float = 1.0,
+    ) -> None:
+        self.connection = connect(redis_url)
+        self.queue = Queue(queue, connection=self.connection, serializer=SERIALIZER)
+        self.concurrency = concurrency
+        self.deadline_factor = deadline_factor
+        self.min_deadline = min_deadline
+        self.initial_deadline = initial_deadline
+        self.max_attempts = max_attempts
+        self.poll_seconds = poll_seconds
+        self._seconds_per_robot: float | None = None
+        self._lock = threading.Lock()
+
+    # -- the interface -------------------------------------------------------------------------
+
+    def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray:
+        return self.evaluate_batch(robot_files).fitness
+
+    def evaluate_batch(
+        self, robot_files: Sequence[dict[str, Any]], key: str | None = None
+    ) -> BatchResult:
+        files = list(robot_files)
+        if not files:
+            return BatchResult(np.empty(0), "", 0.0)
+        key = key or batch_digest(files)
+        payload = self._collect(files, key)
+        if "fitness" in payload:
+            fitness = np.array(
+                [math.nan if v is None else float(v) for v in payload["fitness"]], dtype=np.float64
+            )
+            return BatchResult(fitness, str(payload.get("worker", "")), float(payload["seconds"]))
+        if len(files) == 1:
+            log.warning("batch %s failed for good: %s", key, payload.get("error"))
+            return BatchResult(np.array([math.nan]), str(payload.get("worker", "")), 0.0)
+        log.warning("batch %s failed (%s); retrying robot by robot", key, payload.get("error"))
+        parts = [self.evaluate_batch([file], f"{key}-{i}") for i, file in enumerate(files)]
+        return BatchResult(
+            np.concatenate([part.fitness for part in parts]),
+            ",".join(sorted({part.worker for part in parts if part.worker})),
+            sum(part.seconds for part in parts),
+        )
+
+    def close(self) -> None:
+        self.connection.close()
+
+    # -- completion ----------------------------------------------------------------------------
+
+    def deadline(self, robots: int) -> float:
+        """Seconds a started job may run before it is presumed lost."""
+        with self._lock:
+            per_robot = self._seconds_per_robot
+        if per_robot is None:
+            return self.initial_deadline
+        return max(self.min_deadline, self.deadline_factor * per_robot * robots)
+
+    def _learn(self, payload: dict[str, Any]) -> None:
+        robots, seconds = payload.get("robots"), payload.get("seconds")
+        if "fitness" not in payload or not robots or not isinstance(seconds, int | float):
+            return
+        sample = float(seconds) / int(robots)
+        with self._lock:
+            old = self._seconds_per_robot
+            self._seconds_per_robot = sample if old is None else 0.7 * old + 0.3 * sample
+
+    def _enqueue(self, files: list[dict[str, Any]], key: str, attempt: int) -> str:
+        job_id = f"softevo-{key}-a{attempt}"
+        per_robot = self._seconds_per_robot
+        # RQ kills a work horse 60 s after this: the hard limit for a job that runs away
+        timeout = 600 if per_robot is None else max(60, math.ceil(20 * per_robot * len(files)))
+        self.queue.enqueue(
+            JOB_FUNCTION,
+            args=(key, files),
+            job_id=job_id,
+            job_timeout=timeout,
+            result_ttl=600,
+            failure_ttl=3600,
+        )
+        return job_id
+
+    def _collect(self, files: list[dict[str, Any]], key: str) -> dict[str, Any]:
+        """Wait for the first result of any attempt, enqueueing again what is lost."""
+        attempt, job_id = 1, None
+        while True:
+            try:
+                if job_id is None:
+                    job_id = self._enqueue(files, key, attempt)
+                item = self.connection.blpop([result_key(key)], timeout=self.poll_seconds)
+                if item is not None:
+                    payload = json.loads(item[1])
+                    self._learn(payload)
+                    return payload
+                verdict = self._check(job_id, len(files))
+            except REDIS_DOWN as error:
+                log.warning("redis unavailable (%s); batch %s waits", type(error).__name__, key)
+                time.sleep(self.poll_seconds)
+                continue
+            if verdict == "vanished":
+                log.warning("job %s vanished (Redis restarted?); enqueueing it again", job_id)
+                job_id = None
+            elif verdict in ("failed", "late"):
+                if attempt >= self.max_attempts:
+                    return {"error": f"{verdict} after {attempt} attempts"}
+                log.warning("job %s %s; enqueueing attempt %d", job_id, verdict, attempt + 1)
+                attempt, job_id = attempt + 1, None
+
+    def _check(self, job_id: str, robots: int) -> str:
+        """waiting | vanished | failed | late, for a job whose result has not come back."""
+        try:
+            job = Job.fetch(job_id, connection=self.connection, serializer=SERIALIZER)
+        except NoSuchJobError:
+            return "vanished"
+        status = job.get_status(refresh=False)
+        if status in (JobStatus.FAILED, JobStatus.STOPPED, JobStatus.CANCELED):
+            return "failed"
+        if status == JobStatus.STARTED and job.started_at is not None:
+            started = job.started_at
+            if started.tzinfo is None:
+                started = started.replace(tzinfo=UTC)
+            running = (datetime.now(UTC) - started).total_seconds()
+            if running > self.deadline(robots):
+                return "late"
+        return "waiting"

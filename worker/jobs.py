@@ -1,0 +1,39 @@
+"""The job an RQ worker runs: a batch of robot files in, speeds out, pushed onto the batch's
+result list (`worker.queue.result_key`) so the coordinator wakes at once. Plain JSON both ways.
+
+A robot that cannot be built or whose simulation blows up has fitness None (NaN): failed, never
+0. Anything else that goes wrong is reported as `error`, and the evaluator retries the robots one
+by one, so one bad robot fails alone.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import time
+from typing import Any
+
+from rq import get_current_job
+
+from worker.queue import RESULT_TTL, result_key
+
+
+def evaluate_batch(batch_key: str, robot_files: list[dict[str, Any]]) -> dict[str, Any]:
+    from core.evaluation import evaluate_robot_files  # loaded (and warm) in the worker
+
+    started = time.perf_counter()
+    worker = os.environ.get("RQ_WORKER_ID") or f"{socket.gethostname()}:{os.getpid()}"
+    try:
+        payload: dict[str, Any] = {"fitness": evaluate_robot_files(robot_files)}
+    except Exception as error:
+        payload = {"error": f"{type(error).__name__}: {error}"[:1000]}
+    payload.update(worker=worker, seconds=time.perf_counter() - started, robots=len(robot_files))
+    job = get_current_job()
+    if job is not None:
+        payload["job"] = job.id
+        pipe = job.connection.pipeline()
+        pipe.rpush(result_key(batch_key), json.dumps(payload))
+        pipe.expire(result_key(batch_key), RESULT_TTL)
+        pipe.execute()
+    return payload

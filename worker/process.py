@@ -1,0 +1,47 @@
+"""`softevo worker`: an RQ worker that loads (or compiles) the physics kernels before it takes
+its first job, so no job pays for compilation or a cold import.
+
+The default class is RQ's forking `Worker`: each job runs in a child forked from the warm parent
+(kernels already loaded), and the parent can kill a child that runs away, which no alarm signal
+inside a numba loop could. BENCHMARKS.md (`bench/worker.py`) compares it with the alternatives.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import socket
+import uuid
+
+from rq import Queue, SimpleWorker, Worker
+
+from worker.queue import QUEUE, SERIALIZER, connect
+
+WORKER_CLASSES: dict[str, type[Worker]] = {"fork": Worker, "simple": SimpleWorker}
+
+
+def run_worker(
+    redis_url: str,
+    *,
+    burst: bool = False,
+    name: str | None = None,
+    worker_class: str = "fork",
+    queue: str = QUEUE,
+    log_level: str = "INFO",
+) -> bool:
+    """Warm up, then work until stopped (or, with `burst`, until the queue is empty)."""
+    from core.evaluation import warm_up
+
+    warm_up()
+    connection = connect(redis_url)
+    connection.ping()  # fail now, with a clear error, if Redis is not there
+    name = name or f"{socket.gethostname()}.{os.getpid()}.{uuid.uuid4().hex[:6]}"
+    cls = WORKER_CLASSES[worker_class]
+    worker = cls(
+        [Queue(queue, connection=connection, serializer=SERIALIZER)],
+        connection=connection,
+        serializer=SERIALIZER,
+        name=name,
+    )
+    logging.getLogger("softevo.worker").info("worker %s: kernels warm, taking jobs", name)
+    return worker.work(burst=burst, logging_level=log_level, with_scheduler=False)

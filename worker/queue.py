@@ -1,0 +1,26 @@
+"""What both sides of the queue agree on: the queue's name, the job's import path, the keys
+results land on, and how to connect. Jobs and results are JSON (RQ's JSONSerializer), never
+pickles, so nothing read from Redis can run code in the API process."""
+
+from __future__ import annotations
+
+from redis import Redis
+from rq.serializers import JSONSerializer
+
+QUEUE = "softevo"
+#: Named by import path, so the process that enqueues never imports the physics.
+JOB_FUNCTION = "worker.jobs.evaluate_batch"
+SERIALIZER = JSONSerializer
+#: How long a batch's result waits to be collected (s); a late duplicate expires with it.
+RESULT_TTL = 3600
+
+
+def result_key(batch_key: str) -> str:
+    """The Redis list a batch's results are pushed onto, by whichever attempt finishes first."""
+    return f"softevo:result:{batch_key}"
+
+
+def connect(url: str) -> Redis:
+    return Redis.from_url(
+        url, socket_connect_timeout=5, socket_keepalive=True, health_check_interval=30
+    )
