@@ -1,4 +1,5 @@
 # softevo image: the package, its console script and the example robots; runs as a non-root user.
+# One image for every role: `softevo serve` (default), `softevo worker`, `softevo simulate FILE`.
 FROM python:3.11-slim
 
 ENV PYTHONDONTWRITEBYTECODE=1 \
@@ -15,7 +16,11 @@ COPY worker ./worker
 COPY softevo ./softevo
 COPY migrations ./migrations
 COPY examples ./examples
-RUN pip install . && mkdir -p /data && chown -R softevo:softevo /app /data
+# Install as the README does. The numba cache directory exists in the image and belongs to
+# softevo, so a fresh named volume mounted there starts with that owner and stays writable.
+RUN pip install . \
+    && mkdir -p /data "$NUMBA_CACHE_DIR" \
+    && chown -R softevo:softevo /app /data /home/softevo/.cache
 
 USER softevo
 EXPOSE 8000

@@ -6,6 +6,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.services import redis_server, workers  # noqa: F401 - shared fixtures
+
 ROOT = Path(__file__).resolve().parent.parent
 
 

@@ -1,0 +1,133 @@
+"""Real services for tests: a private redis-server on a free port, and `softevo worker`
+processes. Without the binary the tests skip on a laptop, but under CI=true they fail."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+
+def free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+def require(binary: str) -> str:
+    path = shutil.which(binary)
+    if path is None:
+        if os.environ.get("CI") == "true":
+            pytest.fail(f"{binary} is needed under CI and is not installed")
+        pytest.skip(f"{binary} is not installed")
+    return path
+
+
+class RedisServer:
+    """A redis-server of our own (no persistence), which a test may kill and start again."""
+
+    def __init__(self, workdir: Path) -> None:
+        self.binary = require("redis-server")
+        self.port = free_port()
+        self.workdir = workdir
+        self.process: subprocess.Popen[bytes] | None = None
+
+    @property
+    def url(self) -> str:
+        return f"redis://127.0.0.1:{self.port}/0"
+
+    def start(self) -> None:
+        command = [self.binary, "--port", str(self.port), "--bind", "127.0.0.1"]
+        command += ["--save", "", "--appendonly", "no", "--dir", str(self.workdir)]
+        self.process = subprocess.Popen(
+            command,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline:
+            try:
+                with socket.create_connection(("127.0.0.1", self.port), timeout=0.2) as s:
+                    s.sendall(b"PING\r\n")
+                    if s.recv(16).startswith(b"+PONG"):
+                        return
+            except OSError:
+                time.sleep(0.05)
+        raise RuntimeError(f"redis-server did not start on port {self.port}")
+
+    def kill(self) -> None:
+        if self.process is not None and self.process.poll() is None:
+            self.process.send_signal(signal.SIGKILL)
+            self.process.wait(10)
+
+
+class Workers:
+    """`softevo worker` processes on one Redis; each logs to its own file."""
+
+    def __init__(self, redis_url: str, workdir: Path) -> None:
+        self.redis_url = redis_url
+        self.workdir = workdir
+        self.processes: dict[str, subprocess.Popen[bytes]] = {}
+
+    def start(self, name: str, *extra: str) -> subprocess.Popen[bytes]:
+        log = (self.workdir / f"worker-{name}.log").open("wb")
+        env = {**os.environ, "SOFTEVO_REDIS_URL": self.redis_url}
+        process = subprocess.Popen(
+            [sys.executable, "-m", "softevo.cli", "worker", "--name", name, *extra],
+            env=env,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+        )
+        self.processes[name] = process
+        return process
+
+    def wait_ready(self, name: str, timeout: float = 60) -> None:
+        """Until the worker says its kernels are warm and it takes jobs."""
+        log = self.workdir / f"worker-{name}.log"
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if "taking jobs" in log.read_text(errors="replace"):
+                return
+            if self.processes[name].poll() is not None:
+                raise RuntimeError(f"worker {name} exited:\n{self.log(name)}")
+            time.sleep(0.05)
+        raise RuntimeError(f"worker {name} not ready in {timeout} s:\n{self.log(name)}")
+
+    def log(self, name: str) -> str:
+        return (self.workdir / f"worker-{name}.log").read_text(errors="replace")[-4000:]
+
+    def kill(self, name: str, sig: signal.Signals = signal.SIGKILL) -> None:
+        process = self.processes[name]
+        if process.poll() is None:
+            process.send_signal(sig)
+            if sig in (signal.SIGKILL, signal.SIGTERM):
+                process.wait(10)
+
+    def stop_all(self) -> None:
+        for process in self.processes.values():
+            if process.poll() is None:
+                process.send_signal(signal.SIGCONT)
+                process.kill()
+                process.wait(10)
+
+
+@pytest.fixture
+def redis_server(tmp_path: Path):  # type: ignore[no-untyped-def]
+    server = RedisServer(tmp_path)
+    server.start()
+    yield server
+    server.kill()
+
+
+@pytest.fixture
+def workers(redis_server: RedisServer, tmp_path: Path):  # type: ignore[no-untyped-def]
+    pool = Workers(redis_server.url, tmp_path)
+    yield pool
+    pool.stop_all()
