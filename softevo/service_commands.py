@@ -118,6 +118,7 @@ def worker_command(args: argparse.Namespace) -> int:
 
     from softevo.cli import CommandError
     from worker.process import run_worker
+    from worker.queue import redacted
 
     url = args.url or _settings(args).redis_url
     if not url:
@@ -132,5 +133,5 @@ def worker_command(args: argparse.Namespace) -> int:
             log_level=args.log_level.upper(),
         )
     except (RedisError, ValueError) as error:
-        raise CommandError(f"{url}: {str(error).splitlines()[0]}") from None
+        raise CommandError(f"{redacted(url)}: {str(error).splitlines()[0]}") from None
     return 0

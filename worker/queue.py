@@ -4,6 +4,8 @@ pickles, so nothing read from Redis can run code in the API process."""
 
 from __future__ import annotations
 
+from urllib.parse import urlsplit, urlunsplit
+
 from redis import Redis
 from rq.serializers import JSONSerializer
 
@@ -18,6 +20,15 @@ RESULT_TTL = 3600
 def result_key(batch_key: str) -> str:
     """The Redis list a batch's results are pushed onto, by whichever attempt finishes first."""
     return f"softevo:result:{batch_key}"
+
+
+def redacted(url: str) -> str:
+    """The URL with its password hidden, for messages and logs."""
+    parts = urlsplit(url)
+    if parts.password is None:
+        return url
+    netloc = parts.netloc.replace(f":{parts.password}@", ":***@", 1)
+    return urlunsplit(parts._replace(netloc=netloc))
 
 
 def connect(url: str) -> Redis:
