@@ -61,10 +61,10 @@ class SimSettings(BaseModel):
                 f"settle_time: {self.settle_time} s must be shorter than duration "
                 f"({self.duration} s)"
             )
-        if self.n_steps > MAX_STEPS:
+        steps = self.duration / self.dt  # may overflow to inf for a dt near zero
+        if not steps <= MAX_STEPS:
             raise ValueError(
-                f"duration: duration / dt = {self.n_steps} steps, more than the limit of "
-                f"{MAX_STEPS}"
+                f"duration: duration / dt = {steps:.4g} steps, more than the limit of {MAX_STEPS}"
             )
         return self
 

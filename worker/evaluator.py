@@ -53,6 +53,7 @@ class RQEvaluator:
         initial_deadline: float = 30.0,
         max_attempts: int = 3,
         poll_seconds: float = 1.0,
+        job_function: str = JOB_FUNCTION,
     ) -> None:
         self.connection = connect(redis_url)
         self.queue = Queue(queue, connection=self.connection, serializer=SERIALIZER)
@@ -62,7 +63,9 @@ class RQEvaluator:
         self.initial_deadline = initial_deadline
         self.max_attempts = max_attempts
         self.poll_seconds = poll_seconds
+        self.job_function = job_function
         self._seconds_per_robot: float | None = None
+        self._held_since: dict[str, float] = {}  # job id -> when first seen taken, not started
         self._lock = threading.Lock()
 
     # -- the interface -------------------------------------------------------------------------
@@ -122,7 +125,7 @@ class RQEvaluator:
         # RQ kills a work horse 60 s after this: the hard limit for a job that runs away
         timeout = 600 if per_robot is None else max(60, math.ceil(20 * per_robot * len(files)))
         self.queue.enqueue(
-            JOB_FUNCTION,
+            self.job_function,
             args=(key, files),
             job_id=job_id,
             job_timeout=timeout,
@@ -166,6 +169,20 @@ class RQEvaluator:
         status = job.get_status(refresh=False)
         if status in (JobStatus.FAILED, JobStatus.STOPPED, JobStatus.CANCELED):
             return "failed"
+        if status == JobStatus.QUEUED:
+            # A worker takes a job by moving it to an intermediate list, then marks it started
+            # within milliseconds. One frozen in between (SIGSTOP while idle) holds the job with
+            # no deadline of RQ's own; give it `min_deadline` to start.
+            held = self.connection.lpos(self.queue.intermediate_queue_key, job_id) is not None
+            now = time.monotonic()
+            with self._lock:
+                since = self._held_since.setdefault(job_id, now) if held else None
+                if not held:
+                    self._held_since.pop(job_id, None)
+            if since is not None and now - since > self.min_deadline:
+                with self._lock:
+                    self._held_since.pop(job_id, None)
+                return "late"
         if status == JobStatus.STARTED and job.started_at is not None:
             started = job.started_at
             if started.tzinfo is None:

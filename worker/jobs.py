@@ -29,6 +29,11 @@ def evaluate_batch(batch_key: str, robot_files: list[dict[str, Any]]) -> dict[st
     except Exception as error:
         payload = {"error": f"{type(error).__name__}: {error}"[:1000]}
     payload.update(worker=worker, seconds=time.perf_counter() - started, robots=len(robot_files))
+    return push_result(batch_key, payload)
+
+
+def push_result(batch_key: str, payload: dict[str, Any]) -> dict[str, Any]:
+    """Push `payload` onto the batch's result list (inside an RQ job) and return it."""
     job = get_current_job()
     if job is not None:
         payload["job"] = job.id

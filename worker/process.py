@@ -8,11 +8,16 @@ inside a numba loop could. BENCHMARKS.md (`bench/worker.py`) compares it with th
 
 from __future__ import annotations
 
+import itertools
 import logging
 import os
 import socket
+import time
 import uuid
 
+from redis import Redis
+from redis.exceptions import ConnectionError as RedisConnectionError
+from redis.exceptions import TimeoutError as RedisTimeoutError
 from rq import Queue, SimpleWorker, Worker
 
 from worker.queue import QUEUE, SERIALIZER, connect
@@ -33,15 +38,33 @@ def run_worker(
     from core.evaluation import warm_up
 
     warm_up()
+    log = logging.getLogger("softevo.worker")
     connection = connect(redis_url)
-    connection.ping()  # fail now, with a clear error, if Redis is not there
-    name = name or f"{socket.gethostname()}.{os.getpid()}.{uuid.uuid4().hex[:6]}"
+    connection.ping()  # fail now, with a clear error, if Redis is not there at the start
+    base = name or f"{socket.gethostname()}.{os.getpid()}.{uuid.uuid4().hex[:6]}"
     cls = WORKER_CLASSES[worker_class]
-    worker = cls(
-        [Queue(queue, connection=connection, serializer=SERIALIZER)],
-        connection=connection,
-        serializer=SERIALIZER,
-        name=name,
-    )
-    logging.getLogger("softevo.worker").info("worker %s: kernels warm, taking jobs", name)
-    return worker.work(burst=burst, logging_level=log_level, with_scheduler=False)
+    for restart in itertools.count():
+        # after Redis went away under a job, register afresh (the old name may still linger)
+        worker = cls(
+            [Queue(queue, connection=connection, serializer=SERIALIZER)],
+            connection=connection,
+            serializer=SERIALIZER,
+            name=base if restart == 0 else f"{base}.r{restart}",
+        )
+        log.info("worker %s: kernels warm, taking jobs", worker.name)
+        try:
+            return worker.work(burst=burst, logging_level=log_level, with_scheduler=False)
+        except (RedisConnectionError, RedisTimeoutError) as error:
+            log.warning("worker %s: lost Redis (%s); reconnecting", worker.name, error)
+            _wait_for(connection)
+    raise AssertionError("unreachable")
+
+
+def _wait_for(connection: Redis, pause: float = 0.5) -> None:
+    """Until Redis answers again."""
+    while True:
+        try:
+            connection.ping()
+            return
+        except (RedisConnectionError, RedisTimeoutError):
+            time.sleep(pause)

@@ -1,0 +1,201 @@
+"""The evaluator contract, one suite run against every backend: the in-process serial evaluator,
+the local process pool, and RQ workers on a private Redis (two real `softevo worker` processes).
+
+What the genetic algorithm and the coordinator rely on (`core.evaluator.Evaluator`): the same
+robot files give the same fitness, bit for bit, in the same order, whichever backend, process or
+batch simulated them; an empty batch is an empty array; a robot file that cannot be built is NaN
+(failed, never 0) for that robot alone; `evaluate` is `evaluate_batch(...).fitness`; and batches
+evaluated concurrently from `concurrency` threads give the same results.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import uuid
+from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any
+
+import numpy as np
+import pytest
+
+from core.config import resolve
+from core.evaluation import PoolEvaluator, SerialEvaluator
+from core.evaluator import Evaluator
+from core.evolution import Evolution
+from core.robot_file import robot_to_json
+from tests.services import RedisServer, Workers
+from worker.evaluator import RQEvaluator
+
+SEEDS = (1, 2, 3)
+
+
+def robot_files(seed: int) -> list[dict[str, Any]]:
+    """The first generation of a quick run: eight robot files (`softevo.robot/1`)."""
+    evolution = Evolution.start(resolve({"preset": "quick", "population": 8, "seed": seed}))
+    return [robot_to_json(evolution.robot(item)) for item in evolution.algorithm.ask()]
+
+
+@pytest.fixture(scope="module")
+def files() -> dict[int, list[dict[str, Any]]]:
+    return {seed: robot_files(seed) for seed in SEEDS}
+
+
+@pytest.fixture(scope="module")
+def reference(files: dict[int, list[dict[str, Any]]]) -> dict[int, np.ndarray]:
+    """What the serial evaluator says, robot by robot: the truth every backend must match."""
+    serial = SerialEvaluator()
+    return {seed: serial.evaluate(batch) for seed, batch in files.items()}
+
+
+def unbuildable(good: dict[str, Any]) -> list[Any]:
+    """Robot files no backend can build: an unknown label, missing keys, not an object."""
+    unknown_label = copy.deepcopy(good)
+    unknown_label["voxels"][0] = "rubber"
+    return [unknown_label, {"format": "softevo.robot/1", "shape": [3, 3, 3]}, "not a robot"]
+
+
+@pytest.fixture(
+    scope="module",
+    params=["serial", "pool", pytest.param("rq", marks=pytest.mark.redis)],
+)
+def evaluator(
+    request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
+) -> Iterator[Evaluator]:
+    """Each backend once per module (starting a pool or two workers is the slow part)."""
+    if request.param == "serial":
+        yield SerialEvaluator()
+        return
+    if request.param == "pool":
+        with PoolEvaluator(2) as pool:
+            yield pool
+        return
+    workdir = tmp_path_factory.mktemp("rq")
+    server = RedisServer(workdir)
+    server.start()
+    workers = Workers(server.url, workdir)
+    try:
+        for name in ("contract-a", "contract-b"):
+            workers.start(name)
+        for name in ("contract-a", "contract-b"):
+            workers.wait_ready(name)
+        rq = RQEvaluator(server.url, poll_seconds=0.2)
+        try:
+            yield rq
+        finally:
+            rq.close()
+    finally:
+        workers.stop_all()
+        server.kill()
+
+
+def key() -> str:
+    """A fresh batch key, so no backend can hand back a result of another test."""
+    return f"contract-{uuid.uuid4().hex[:12]}"
+
+
+def test_same_fitness_as_serial_bit_for_bit_in_order(
+    evaluator: Evaluator,
+    files: dict[int, list[dict[str, Any]]],
+    reference: dict[int, np.ndarray],
+) -> None:
+    for seed in SEEDS:
+        result = evaluator.evaluate_batch(files[seed], key())
+        assert isinstance(result.fitness, np.ndarray)
+        assert result.fitness.dtype == np.float64
+        assert result.fitness.shape == (len(files[seed]),)
+        assert np.array_equal(result.fitness, reference[seed], equal_nan=True), seed
+        assert result.worker, "a batch names who evaluated it"
+        assert result.seconds > 0
+    # Order is preserved: the same robots reversed, and mixed across seeds, come back in step.
+    backwards = evaluator.evaluate_batch(files[1][::-1], key())
+    assert np.array_equal(backwards.fitness, reference[1][::-1], equal_nan=True)
+    mixed = [files[seed][i] for i in range(8) for seed in SEEDS]
+    expected = np.array([reference[seed][i] for i in range(8) for seed in SEEDS])
+    assert np.array_equal(evaluator.evaluate_batch(mixed, key()).fitness, expected, equal_nan=True)
+    # One robot alone, and the same robot twice in a batch: still the same number.
+    alone = evaluator.evaluate_batch(files[2][3:4], key()).fitness
+    assert np.array_equal(alone, reference[2][3:4], equal_nan=True)
+    twice = evaluator.evaluate_batch([files[2][3], files[2][3]], key()).fitness
+    assert np.array_equal(twice, np.repeat(reference[2][3], 2), equal_nan=True)
+
+
+def test_an_empty_batch_is_an_empty_array(evaluator: Evaluator) -> None:
+    result = evaluator.evaluate_batch([], key())
+    assert isinstance(result.fitness, np.ndarray)
+    assert result.fitness.shape == (0,)
+    assert evaluator.evaluate([]).shape == (0,)
+
+
+def test_a_robot_that_cannot_be_built_is_nan_alone(
+    evaluator: Evaluator,
+    files: dict[int, list[dict[str, Any]]],
+    reference: dict[int, np.ndarray],
+) -> None:
+    good = files[3]
+    bad = unbuildable(good[0])
+    batch = [bad[0], good[0], good[1], bad[1], good[2], bad[2], good[3]]
+    broken = [0, 3, 5]
+    result = evaluator.evaluate_batch(batch, key())
+    assert result.fitness.shape == (len(batch),)
+    for index in broken:
+        assert math.isnan(result.fitness[index]), f"robot {index} cannot be built: NaN, never 0"
+    kept = [i for i in range(len(batch)) if i not in broken]
+    assert np.array_equal(result.fitness[kept], reference[3][:4], equal_nan=True)
+    assert result.worker and result.seconds > 0
+    # A batch of nothing but unbuildable robots: all NaN, nothing raised.
+    assert np.isnan(evaluator.evaluate_batch(bad, key()).fitness).all()
+
+
+def test_a_robot_whose_settings_overflow_is_nan_alone(
+    evaluator: Evaluator,
+    files: dict[int, list[dict[str, Any]]],
+    reference: dict[int, np.ndarray],
+) -> None:
+    """dt = 1e-310 passes `dt > 0`, but duration / dt overflows to inf: the settings refuse it
+    like any other bad value, so that robot fails alone, on every backend."""
+    good = files[1]
+    overflow = copy.deepcopy(good[0])
+    overflow["sim"]["dt"] = 1e-310
+    result = evaluator.evaluate_batch([good[0], overflow, good[1]], key())
+    assert math.isnan(result.fitness[1])
+    assert np.array_equal(result.fitness[[0, 2]], reference[1][:2], equal_nan=True)
+
+
+def test_evaluate_is_evaluate_batch_fitness(
+    evaluator: Evaluator,
+    files: dict[int, list[dict[str, Any]]],
+    reference: dict[int, np.ndarray],
+) -> None:
+    batch = files[2][:5] + unbuildable(files[2][0])[:1]
+    plain = evaluator.evaluate(batch)
+    assert isinstance(plain, np.ndarray)
+    assert np.array_equal(plain, evaluator.evaluate_batch(batch, key()).fitness, equal_nan=True)
+    assert np.array_equal(plain[:5], reference[2][:5], equal_nan=True)
+    assert math.isnan(plain[5])
+
+
+def test_concurrent_batches_from_threads_give_the_same_results(
+    evaluator: Evaluator,
+    files: dict[int, list[dict[str, Any]]],
+    reference: dict[int, np.ndarray],
+) -> None:
+    """`concurrency` threads, each with batches of its own (some sharing robots, one empty, one
+    with an unbuildable robot), all at once: every batch gets its own robots' fitness back."""
+    batches: list[tuple[list[Any], np.ndarray]] = []
+    for seed in SEEDS:
+        for start, stop in ((0, 3), (3, 8), (0, 8), (5, 6)):
+            batches.append((files[seed][start:stop], reference[seed][start:stop]))
+    bad = unbuildable(files[1][0])[0]
+    with_bad = np.array([reference[1][0], np.nan, reference[1][1]])
+    batches.append(([files[1][0], bad, files[1][1]], with_bad))
+    batches.append(([], np.empty(0)))
+    assert evaluator.concurrency >= 1
+    with ThreadPoolExecutor(max_workers=evaluator.concurrency) as pool:
+        futures = [pool.submit(evaluator.evaluate_batch, batch, key()) for batch, _ in batches]
+        results = [future.result(timeout=120) for future in futures]
+    for (batch, expected), result in zip(batches, results, strict=True):
+        assert np.array_equal(result.fitness, expected, equal_nan=True)
+        if batch:
+            assert result.worker and result.seconds > 0

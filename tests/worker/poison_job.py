@@ -1,0 +1,16 @@
+"""A job for the fault tests: the real one, except that a batch holding a robot file marked
+`"poison": true` reports an error, as a job whose evaluation raised does."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from worker.jobs import evaluate_batch as real_evaluate_batch
+from worker.jobs import push_result
+
+
+def evaluate_batch(batch_key: str, robot_files: list[dict[str, Any]]) -> dict[str, Any]:
+    if any(isinstance(f, dict) and f.get("poison") for f in robot_files):
+        payload = {"error": "RuntimeError: poison", "worker": "poison", "seconds": 0.0}
+        return push_result(batch_key, {**payload, "robots": len(robot_files)})
+    return real_evaluate_batch(batch_key, robot_files)
