@@ -4,10 +4,10 @@ machine run them, and this side owns completion.
 * A batch's job id is derived from its key (run, generation, content digest) and attempt, and
   every attempt pushes its result onto the same list: the first result wins, a late duplicate is
   never read twice, and the database accepts one fitness per individual anyway.
-* A started job whose result has not come back within a deadline (from the measured time per
-  robot, not a fixed number) is presumed lost with its worker and enqueued again; a job that
-  vanished (Redis restarted without persistence) is enqueued again; while Redis is away, this
-  side waits and retries. RQ's own abandoned-job detection is not relied on.
+* A started job whose result has not come back within a deadline (from the measured seconds per
+  unit of work, steps x voxels, not a fixed number) is presumed lost with its worker and enqueued
+  again; a job that vanished (Redis restarted without persistence) is enqueued again; while
+  Redis is away, this side waits and retries. RQ's own abandoned-job detection is not relied on.
 * A batch whose job raised, or that ran out of attempts, is retried robot by robot, so only the
   robot that fails is marked failed (NaN), once; it never loops.
 
@@ -64,7 +64,7 @@ class RQEvaluator:
         self.max_attempts = max_attempts
         self.poll_seconds = poll_seconds
         self.job_function = job_function
-        self._seconds_per_robot: float | None = None
+        self._seconds_per_unit: float | None = None  # measured: see `work_units`
         self._held_since: dict[str, float] = {}  # job id -> when first seen taken, not started
         self._lock = threading.Lock()
 
@@ -102,28 +102,34 @@ class RQEvaluator:
 
     # -- completion ----------------------------------------------------------------------------
 
-    def deadline(self, robots: int) -> float:
-        """Seconds a started job may run before it is presumed lost."""
+    def expected_seconds(self, files: list[dict[str, Any]]) -> float | None:
+        """What the batch should take on a worker, from the measured seconds per work unit."""
         with self._lock:
-            per_robot = self._seconds_per_robot
-        if per_robot is None:
-            return self.initial_deadline
-        return max(self.min_deadline, self.deadline_factor * per_robot * robots)
+            per_unit = self._seconds_per_unit
+        return None if per_unit is None else per_unit * sum(map(work_units, files))
 
-    def _learn(self, payload: dict[str, Any]) -> None:
-        robots, seconds = payload.get("robots"), payload.get("seconds")
-        if "fitness" not in payload or not robots or not isinstance(seconds, int | float):
+    def deadline(self, files: list[dict[str, Any]]) -> float:
+        """Seconds a started job may run before it is presumed lost."""
+        expected = self.expected_seconds(files)
+        if expected is None:
+            return self.initial_deadline
+        return max(self.min_deadline, self.deadline_factor * expected)
+
+    def _learn(self, payload: dict[str, Any], files: list[dict[str, Any]]) -> None:
+        seconds = payload.get("seconds")
+        units = sum(map(work_units, files))
+        if "fitness" not in payload or units <= 0 or not isinstance(seconds, int | float):
             return
-        sample = float(seconds) / int(robots)
+        sample = float(seconds) / units
         with self._lock:
-            old = self._seconds_per_robot
-            self._seconds_per_robot = sample if old is None else 0.7 * old + 0.3 * sample
+            old = self._seconds_per_unit
+            self._seconds_per_unit = sample if old is None else 0.7 * old + 0.3 * sample
 
     def _enqueue(self, files: list[dict[str, Any]], key: str, attempt: int) -> str:
         job_id = f"softevo-{key}-a{attempt}"
-        per_robot = self._seconds_per_robot
+        expected = self.expected_seconds(files)
         # RQ kills a work horse 60 s after this: the hard limit for a job that runs away
-        timeout = 600 if per_robot is None else max(60, math.ceil(20 * per_robot * len(files)))
+        timeout = 600 if expected is None else max(60, math.ceil(20 * expected))
         self.queue.enqueue(
             self.job_function,
             args=(key, files),
@@ -144,9 +150,9 @@ class RQEvaluator:
                 item = self.connection.blpop([result_key(key)], timeout=self.poll_seconds)
                 if item is not None:
                     payload = json.loads(item[1])
-                    self._learn(payload)
+                    self._learn(payload, files)
                     return payload
-                verdict = self._check(job_id, len(files))
+                verdict = self._check(job_id, files)
             except REDIS_DOWN as error:
                 log.warning("redis unavailable (%s); batch %s waits", type(error).__name__, key)
                 time.sleep(self.poll_seconds)
@@ -160,7 +166,7 @@ class RQEvaluator:
                 log.warning("job %s %s; enqueueing attempt %d", job_id, verdict, attempt + 1)
                 attempt, job_id = attempt + 1, None
 
-    def _check(self, job_id: str, robots: int) -> str:
+    def _check(self, job_id: str, files: list[dict[str, Any]]) -> str:
         """waiting | vanished | failed | late, for a job whose result has not come back."""
         try:
             job = Job.fetch(job_id, connection=self.connection, serializer=SERIALIZER)
@@ -188,6 +194,20 @@ class RQEvaluator:
             if started.tzinfo is None:
                 started = started.replace(tzinfo=UTC)
             running = (datetime.now(UTC) - started).total_seconds()
-            if running > self.deadline(robots):
+            if running > self.deadline(files):
                 return "late"
         return "waiting"
+
+
+def work_units(robot_file: dict[str, Any]) -> float:
+    """A robot's simulation cost in arbitrary units: integration steps x occupied voxels (the
+    springs grow with them), so one measured rate gives deadlines for robots of any size."""
+    try:
+        sim = robot_file.get("sim", {})
+        steps = float(sim.get("duration", 10.0)) / float(sim.get("dt", 0.0005))
+        labels = robot_file.get("voxels") or []
+        size = sum(label != "empty" for label in labels) or len(robot_file.get("springs", [])) / 28
+        units = steps * max(1.0, float(size))
+    except (AttributeError, TypeError, ValueError, ZeroDivisionError):
+        return 1.0
+    return units if math.isfinite(units) and units > 0 else 1.0

@@ -316,10 +316,11 @@ def test_worker_sigkilled_mid_job_while_another_is_alive(
     assert retry is not None, "the lost job was never enqueued again"
     assert retry.get_status() == JobStatus.FINISHED and retry.worker_name == survivor
     recovery = seconds_since(killed_at, retry)
+    deadline = service.evaluator.deadline(caught.job.args[1])
     print(
         f"\n[a] killed {caught.worker} (pids {caught.pids}) in job {caught.job.id}; the batch "
-        f"came back from {survivor} {recovery:.2f} s later (deadline "
-        f"{service.evaluator.deadline(2):.1f} s); run {total:.2f} s, bound {bound:.1f} s"
+        f"came back from {survivor} {recovery:.2f} s later (deadline {deadline:.1f} s); "
+        f"run {total:.2f} s, bound {bound:.1f} s"
     )
     assert total <= bound
     check_completed(service, run_id, run, undisturbed)
@@ -470,7 +471,7 @@ def test_worker_paused_past_the_deadline_then_continued(
     paused = time.monotonic()
     paused_at = datetime.now(UTC)
     other = ({"d1", "d2"} - {caught.worker}).pop()
-    deadline = service.evaluator.deadline(len(caught.job.args[1]))
+    deadline = service.evaluator.deadline(caught.job.args[1])
     try:
         # Past the deadline, the batch is enqueued again and the other worker runs it.
         wait_until(
