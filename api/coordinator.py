@@ -35,7 +35,7 @@ from api.db import Database
 from api.models import Generation, Individual, Run
 from api.storage import now
 from core.config import RunConfig
-from core.evaluator import BatchResult, Evaluator, batch_digest
+from core.evaluator import BatchResult, Evaluator, batch_digest, split_evenly
 from core.ga.algorithm import GAState, GeneticAlgorithm
 from core.ga.algorithm import Individual as GAIndividual
 from core.ga.stats import GenerationStats
@@ -199,8 +199,7 @@ class RunDriver:
         if not todo:
             return results
         encoding = config.make_encoding()
-        size = c.batch_size
-        batches = [list(todo[i : i + size]) for i in range(0, len(todo), size)]
+        batches = split_evenly(todo, c.batch_size, c.evaluator.workers())
         executor = ThreadPoolExecutor(max_workers=c.parallel_batches, thread_name_prefix="batch")
         try:
             futures: dict[Future[BatchResult], list[int]] = {}

@@ -72,6 +72,9 @@ class SerialEvaluator(_Timed):
 
     concurrency = 1
 
+    def workers(self) -> int:
+        return 1
+
     def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray:
         return _to_array(evaluate_robot_files(list(robot_files)))
 
@@ -132,6 +135,9 @@ class PoolEvaluator(_Timed):
                         pool.shutdown(wait=False, cancel_futures=True)
                         self._pool = self._new_pool()
         raise AssertionError("unreachable")
+
+    def workers(self) -> int:
+        return self.processes
 
     def close(self) -> None:
         self._pool.shutdown(wait=True, cancel_futures=True)

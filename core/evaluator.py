@@ -10,7 +10,9 @@ simulated it, so every backend gives the same learning curve.
 from __future__ import annotations
 
 import hashlib
+import itertools
 import json
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
@@ -35,6 +37,11 @@ class Evaluator(Protocol):
 
     def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray: ...
 
+    def workers(self) -> int:
+        """How many batches this evaluator runs at the same moment now (processes, live RQ
+        workers; at least 1): the coordinator cuts a generation into at least this many."""
+        ...
+
     def evaluate_batch(
         self, robot_files: Sequence[dict[str, Any]], key: str | None = None
     ) -> BatchResult:
@@ -42,6 +49,18 @@ class Evaluator(Protocol):
         ...
 
     def close(self) -> None: ...
+
+
+def split_evenly(items: Sequence[int], size: int, workers: int) -> list[list[int]]:
+    """Contiguous batches of at most `size`, but at least `workers` of them (when there are that
+    many items) and of near-equal length, so a generation's few new robots keep every worker busy
+    instead of one batch of 4 leaving the others idle at the generation barrier."""
+    n = len(items)
+    if n == 0:
+        return []
+    count = min(n, max(math.ceil(n / max(1, size)), workers))
+    bounds = [-(-i * n // count) for i in range(count + 1)]  # ceil: longer batches first
+    return [list(items[a:b]) for a, b in itertools.pairwise(bounds)]
 
 
 def batch_digest(robot_files: Sequence[dict[str, Any]]) -> str:

@@ -199,3 +199,9 @@ def test_concurrent_batches_from_threads_give_the_same_results(
         assert np.array_equal(result.fitness, expected, equal_nan=True)
         if batch:
             assert result.worker and result.seconds > 0
+
+
+def test_workers_counts_what_runs_at_once(evaluator: Evaluator) -> None:
+    """Serial: 1; the pool: its 2 processes; RQ: the 2 workers registered on the queue."""
+    expected = 1 if isinstance(evaluator, SerialEvaluator) else 2
+    assert evaluator.workers() == expected

@@ -16,6 +16,7 @@ Only redis, rq and numpy are imported here: the API process enqueues without loa
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import math
@@ -28,7 +29,7 @@ from typing import Any
 import numpy as np
 from redis.exceptions import ConnectionError as RedisConnectionError
 from redis.exceptions import TimeoutError as RedisTimeoutError
-from rq import Queue
+from rq import Queue, Worker
 from rq.exceptions import NoSuchJobError
 from rq.job import Job, JobStatus
 
@@ -67,6 +68,7 @@ class RQEvaluator:
         self._seconds_per_unit: float | None = None  # measured: see `work_units`
         self._held_since: dict[str, float] = {}  # job id -> when first seen taken, not started
         self._lock = threading.Lock()
+        self._workers = (1, -math.inf)  # (live workers on the queue, when counted)
 
     # -- the interface -------------------------------------------------------------------------
 
@@ -96,6 +98,17 @@ class RQEvaluator:
             ",".join(sorted({part.worker for part in parts if part.worker})),
             sum(part.seconds for part in parts),
         )
+
+    def workers(self) -> int:
+        """Workers registered on the queue, counted at most every 5 s (the last count, or 1,
+        while Redis is away): batches are cut so that each of them can have one."""
+        count, when = self._workers
+        if time.monotonic() - when < 5.0:
+            return count
+        with contextlib.suppress(REDIS_DOWN):
+            count = max(1, Worker.count(connection=self.connection, queue=self.queue))
+        self._workers = (count, time.monotonic())
+        return count
 
     def close(self) -> None:
         self.connection.close()

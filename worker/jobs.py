@@ -23,7 +23,8 @@ def evaluate_batch(batch_key: str, robot_files: list[dict[str, Any]]) -> dict[st
     from core.evaluation import evaluate_robot_files  # loaded (and warm) in the worker
 
     started = time.perf_counter()
-    worker = os.environ.get("RQ_WORKER_ID") or f"{socket.gethostname()}:{os.getpid()}"
+    job = get_current_job()  # the worker's name is on the job for every worker class
+    worker = (job and job.worker_name) or f"{socket.gethostname()}:{os.getpid()}"
     try:
         payload: dict[str, Any] = {"fitness": evaluate_robot_files(robot_files)}
     except Exception as error:

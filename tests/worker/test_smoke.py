@@ -14,14 +14,16 @@ from worker.evaluator import RQEvaluator
 pytestmark = pytest.mark.redis
 
 
-def test_rq_evaluator_matches_the_serial_one(redis_server, workers) -> None:
-    workers.start("one")
+@pytest.mark.parametrize("worker_class", ["fork", "simple"])
+def test_rq_evaluator_matches_the_serial_one(redis_server, workers, worker_class: str) -> None:
+    """Both worker classes give the serial fitness and report the worker's own name."""
+    workers.start("one", "--worker-class", worker_class)
     workers.wait_ready("one")
     evolution = Evolution.start(resolve({"preset": "quick", "population": 6, "seed": 2}))
     files = [robot_to_json(evolution.robot(item)) for item in evolution.algorithm.ask()]
     evaluator = RQEvaluator(redis_server.url)
     try:
-        result = evaluator.evaluate_batch(files, key="smoke")
+        result = evaluator.evaluate_batch(files, key=f"smoke-{worker_class}")
     finally:
         evaluator.close()
     assert np.array_equal(result.fitness, SerialEvaluator().evaluate(files), equal_nan=True)
