@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import gc
 import logging
+import re
 from collections.abc import AsyncIterator, Callable
 from contextlib import asynccontextmanager
 from typing import Any
@@ -18,11 +19,11 @@ from fastapi import FastAPI, Request
 from fastapi.exception_handlers import http_exception_handler
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
-from fastapi.routing import APIRoute
 from sqlalchemy.exc import InterfaceError, OperationalError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from api import storage
+from api.body_limit import BodyLimitMiddleware
 from api.coordinator import Coordinator
 from api.db import Database, alembic_config, current_revision
 from api.routes import meta, runs, sweeps
@@ -99,6 +100,7 @@ def create_app(
         version="0.1.0",
         lifespan=lifespan,
     )
+    app.add_middleware(BodyLimitMiddleware, max_bytes=settings.limits.max_body_bytes)
     app.include_router(runs.router)
     app.include_router(sweeps.router)
     app.include_router(meta.router)
@@ -114,6 +116,10 @@ def _install_error_handlers(app: FastAPI) -> None:
     @app.exception_handler(storage.ConflictError)
     async def conflict(_request: Request, error: storage.ConflictError) -> JSONResponse:
         return JSONResponse({"detail": str(error)}, status_code=409)
+
+    @app.exception_handler(storage.QueueFullError)
+    async def queue_full(_request: Request, error: storage.QueueFullError) -> JSONResponse:
+        return JSONResponse({"detail": str(error)}, status_code=429, headers={"Retry-After": "30"})
 
     @app.exception_handler(RequestError)
     async def bad_request(_request: Request, error: RequestError) -> JSONResponse:
@@ -136,17 +142,22 @@ def _install_error_handlers(app: FastAPI) -> None:
     @app.exception_handler(StarletteHTTPException)
     async def http_error(request: Request, error: StarletteHTTPException) -> Any:
         if error.status_code == 405:  # Starlette lists only the first matching route's methods
-            path = request.url.path
-            methods = {
-                method
-                for route in request.app.router.routes
-                if isinstance(route, APIRoute) and route.path_regex.match(path)
-                for method in route.methods
-            }
-            error.headers = {**(error.headers or {}), "Allow": ", ".join(sorted(methods))}
+            allowed = _allowed_methods(request.app, request.url.path)
+            error.headers = {**(error.headers or {}), "Allow": ", ".join(allowed)}
         return await http_exception_handler(request, error)
 
     @app.exception_handler(Exception)
     async def internal(_request: Request, error: Exception) -> JSONResponse:
         log.exception("unhandled error")
         return JSONResponse({"detail": "internal server error"}, status_code=500)
+
+
+def _allowed_methods(app: FastAPI, path: str) -> list[str]:
+    """Every method the OpenAPI schema lists for paths matching `path` (the public surface, read
+    from the schema because routers nest differently across FastAPI releases)."""
+    methods: set[str] = set()
+    for template, operations in app.openapi()["paths"].items():
+        pattern = re.sub(r"\\{[^/]+?\\}", "[^/]+", re.escape(template))
+        if re.fullmatch(pattern, path):
+            methods.update(method.upper() for method in operations)
+    return sorted(methods)

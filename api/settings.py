@@ -25,6 +25,8 @@ class Limits:
     min_dt: float = 1e-4  # s
     max_evaluations: int = 1_000_000  # population x generations
     max_sweep_runs: int = 200
+    max_queued: int = 1000  # runs waiting to start; more are refused with 429
+    max_body_bytes: int = 1_048_576  # a request body over this is refused with 413
 
 
 @dataclass(frozen=True)
@@ -62,6 +64,8 @@ class Settings:
         for name in ("max_running", "batch_size", "queued_batches"):
             if getattr(settings, name) < 1:
                 raise ValueError(f"SOFTEVO_{name.upper()}: must be >= 1")
+        if settings.limits.max_queued < 1 or settings.limits.max_body_bytes < 1024:
+            raise ValueError("SOFTEVO_MAX_QUEUED must be >= 1, SOFTEVO_MAX_BODY_BYTES >= 1024")
         if settings.workers is not None and settings.workers < 1:
             raise ValueError("SOFTEVO_WORKERS: must be >= 1")
         if settings.lease_seconds <= 0 or settings.poll_seconds <= 0:

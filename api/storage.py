@@ -32,6 +32,28 @@ class ConflictError(RuntimeError):
     """An action the run's state forbids."""
 
 
+class QueueFullError(RuntimeError):
+    """Queuing would take the waiting runs past their bound (SOFTEVO_MAX_QUEUED)."""
+
+
+QUEUE_LOCK = 0x50F7E0  # PostgreSQL advisory lock: one queuing transaction at a time
+
+
+def _make_room(session: Any, wanted: int, max_queued: int | None) -> None:
+    """Refuse `wanted` more runs if the queue would pass `max_queued`; counted inside the write
+    transaction, under a lock on PostgreSQL (SQLite's BEGIN IMMEDIATE already serialises)."""
+    if max_queued is None:
+        return
+    if session.get_bind().dialect.name == "postgresql":
+        session.execute(select(func.pg_advisory_xact_lock(QUEUE_LOCK)))
+    queued = session.scalar(select(func.count()).select_from(Run).where(Run.status == "queued"))
+    if queued + wanted > max_queued:
+        raise QueueFullError(
+            f"{queued} runs are waiting and {wanted} more would pass the bound of {max_queued} "
+            "(SOFTEVO_MAX_QUEUED); try again when some have started"
+        )
+
+
 @dataclass(frozen=True)
 class RunRecord:
     id: int
@@ -76,8 +98,9 @@ def _new_run(config: RunConfig, sweep_id: int | None = None) -> Run:
     )  # fmt: skip
 
 
-def create_run(db: Database, config: RunConfig) -> RunRecord:
+def create_run(db: Database, config: RunConfig, max_queued: int | None = None) -> RunRecord:
     with db.write() as session:
+        _make_room(session, 1, max_queued)
         row = _new_run(config)
         session.add(row)
         session.flush()
@@ -85,10 +108,11 @@ def create_run(db: Database, config: RunConfig) -> RunRecord:
 
 
 def create_sweep(
-    db: Database, request: dict[str, Any], configs: list[RunConfig]
+    db: Database, request: dict[str, Any], configs: list[RunConfig], max_queued: int | None = None
 ) -> tuple[int, list[int]]:
     """One sweep row and its runs, all in one transaction (all queued, or none)."""
     with db.write() as session:
+        _make_room(session, len(configs), max_queued)
         sweep = Sweep(request=request, created_at=now())
         session.add(sweep)
         session.flush()

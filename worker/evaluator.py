@@ -161,10 +161,13 @@ class RQEvaluator:
                 if job_id is None:
                     job_id = self._enqueue(files, key, attempt)
                 item = self.connection.blpop([result_key(key)], timeout=self.poll_seconds)
-                if item is not None:
-                    payload = json.loads(item[1])
+                payload = None if item is None else parse_result(item[1], len(files))
+                if payload is not None:
                     self._learn(payload, files)
                     return payload
+                if item is not None:
+                    log.warning("batch %s: ignored a malformed result %.80r", key, item[1])
+                    continue
                 verdict = self._check(job_id, files)
             except REDIS_DOWN as error:
                 log.warning("redis unavailable (%s); batch %s waits", type(error).__name__, key)
@@ -224,3 +227,23 @@ def work_units(robot_file: dict[str, Any]) -> float:
     except (AttributeError, TypeError, ValueError, ZeroDivisionError):
         return 1.0
     return units if math.isfinite(units) and units > 0 else 1.0
+
+
+def parse_result(raw: bytes | str, robots: int) -> dict[str, Any] | None:
+    """A job's result as plain JSON data, or None when it is not one: bytes that are not JSON
+    (a pickle, say) are never deserialised any other way, and a result of the wrong shape is
+    not taken for fitness."""
+    try:
+        payload = json.loads(raw)
+    except (ValueError, UnicodeDecodeError):
+        return None
+    if not isinstance(payload, dict):
+        return None
+    if "fitness" in payload:
+        fitness = payload["fitness"]
+        if not isinstance(fitness, list) or len(fitness) != robots:
+            return None
+        if not all(v is None or type(v) in (int, float) for v in fitness):
+            return None
+        return payload
+    return payload if isinstance(payload.get("error"), str) else None

@@ -33,7 +33,11 @@ router = APIRouter(prefix="/runs", tags=["runs"])
 RunId = Annotated[int, Path(ge=1, le=2**31 - 1, description="run id")]
 NOT_FOUND: dict[int | str, dict[str, Any]] = {404: {"model": Message}}
 #: FastAPI answers 400 to a body it cannot decode (not UTF-8); invalid JSON text is a 422.
-BAD_BODY: dict[int | str, dict[str, Any]] = {400: {"model": Message}}
+BAD_BODY: dict[int | str, dict[str, Any]] = {
+    400: {"model": Message, "description": "The body is not JSON"},
+    413: {"model": Message, "description": "The body is over SOFTEVO_MAX_BODY_BYTES"},
+    429: {"model": Message, "description": "The run queue is full (SOFTEVO_MAX_QUEUED)"},
+}
 
 
 def run_public(db: storage.Database, run: storage.RunRecord) -> RunPublic:
@@ -84,7 +88,7 @@ def create_run(
 ) -> RunPublic:
     """Queue a run: a preset plus any setting to override. 422 names a bad or too-large field."""
     config = run_config(body.model_dump(exclude_unset=True), settings.limits)
-    record = storage.create_run(db, config)
+    record = storage.create_run(db, config, settings.limits.max_queued)
     coordinator.wake()
     response.headers["Location"] = f"/runs/{record.id}"
     return run_public(db, record)

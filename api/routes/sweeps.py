@@ -87,7 +87,7 @@ def create_sweep(
             )
     stored = body.model_dump(mode="json", exclude_unset=True)
     stored.update(shapes=[list(s) for s in shapes], seeds=seeds)
-    sweep_id, _ = storage.create_sweep(db, stored, configs)
+    sweep_id, _ = storage.create_sweep(db, stored, configs, settings.limits.max_queued)
     coordinator.wake()
     response.headers["Location"] = f"/sweeps/{sweep_id}"
     return sweep_public(db, sweep_id)
