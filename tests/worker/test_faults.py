@@ -13,11 +13,14 @@ from __future__ import annotations
 
 import contextlib
 import copy
+import json
 import math
 import os
+import pickle
 import signal
 import threading
 import time
+import zlib
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from datetime import UTC, datetime
@@ -329,6 +332,35 @@ def test_worker_sigkilled_mid_job_while_another_is_alive(
     assert workers.processes[survivor].poll() is None
 
 
+def test_work_horse_sigkilled_mid_job(
+    service: Service, workers: Workers, undisturbed: Undisturbed
+) -> None:
+    """Only the job's process dies (out of memory, say); its worker lives on, RQ marks the job
+    failed, and the batch is enqueued again at once instead of waiting for a deadline."""
+    start_workers(workers, "h1", "h2")
+    started = time.monotonic()
+    run_id = service.start_run()
+    service.wait_for_fitness(run_id)
+    caught = pause_mid_job(service.redis, workers, {"h1", "h2"})
+    horses, main = caught.pids[:-1], caught.pids[-1]
+    for pid in horses:
+        os.kill(pid, signal.SIGKILL)
+    killed_at = datetime.now(UTC)
+    os.kill(main, signal.SIGCONT)
+    run = service.wait_done(run_id, timeout=undisturbed.seconds + 30)
+    retry = fetch(service.redis, caught.attempt(2))
+    assert retry is not None, "the batch of the killed work horse was never enqueued again"
+    assert retry.get_status() == JobStatus.FINISHED
+    print(
+        f"\n[h] SIGKILLed the work horse {horses} of {caught.worker} in job {caught.job.id}; "
+        f"the batch came back {seconds_since(killed_at, retry):.2f} s later (from "
+        f"{retry.worker_name}); run {time.monotonic() - started:.2f} s"
+    )
+    check_completed(service, run_id, run, undisturbed)
+    assert workers.processes[caught.worker].poll() is None, "the worker died with its horse"
+    assert fetch(service.redis, caught.attempt(3)) is None
+
+
 def test_only_worker_killed_then_a_new_one_started_later(
     service: Service, workers: Workers, undisturbed: Undisturbed
 ) -> None:
@@ -583,5 +615,43 @@ def test_a_batch_taken_by_a_worker_paused_while_idle_is_run_elsewhere(
     finally:
         workers.kill("i1", signal.SIGCONT)
         thread.join(30)
+        evaluator.close()
+        redis.close()
+
+
+def test_results_are_plain_json_and_garbage_on_the_result_list_is_ignored(
+    redis_server: RedisServer, workers: Workers
+) -> None:
+    """Jobs are stored as JSON (never pickle), and bytes on a batch's result list that are not a
+    well-formed JSON result (a pickle, the wrong number of speeds) are skipped, not trusted."""
+    evolution = Evolution.start(resolve(REQUEST))
+    files = [robot_to_json(evolution.robot(item)) for item in evolution.algorithm.ask()][:2]
+    expected = SerialEvaluator().evaluate(files)
+    redis = Redis.from_url(redis_server.url)
+    evaluator = RQEvaluator(redis_server.url, poll_seconds=0.2)
+    try:
+        for junk in (
+            pickle.dumps({"fitness": [1.0, 2.0]}),
+            b'{"fitness": [1.0]}',
+            b'{"fitness": ["fast", 1.0]}',
+            b"[1, 2]",
+        ):
+            redis.rpush(result_key("garbage"), junk)
+        outcome: list[Any] = []
+        thread = threading.Thread(
+            target=lambda: outcome.append(evaluator.evaluate_batch(files, "garbage")), daemon=True
+        )
+        thread.start()
+        job_key = b"rq:job:softevo-garbage-a1"
+        wait_until(lambda: redis.exists(job_key) == 1, 10, "the job enqueued")
+        stored = zlib.decompress(redis.hget(job_key, "data"))  # RQ compresses the job's data
+        function, _instance, args, _kwargs = json.loads(stored)
+        assert function == "worker.jobs.evaluate_batch" and args == ["garbage", files]
+        start_workers(workers, "g1")
+        thread.join(30)
+        assert not thread.is_alive()
+        assert np.array_equal(outcome[0].fitness, expected, equal_nan=True)
+        assert outcome[0].worker == "g1"
+    finally:
         evaluator.close()
         redis.close()
