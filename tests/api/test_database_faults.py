@@ -1,0 +1,198 @@
+"""PostgreSQL faults, done for real while a run goes: its connections terminated by the server
+(`pg_terminate_backend`) again and again, commits included, and the database host cut off
+altogether behind a TCP relay. A generation is never half written, the API answers 503 JSON
+while the database is away and recovers by itself, and the run ends with the undisturbed curve,
+each individual stored once.
+"""
+
+from __future__ import annotations
+
+import random
+import threading
+import time
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+from fastapi.testclient import TestClient
+from sqlalchemy import create_engine, text
+from sqlalchemy.engine import make_url
+
+from api.app import create_app
+from api.settings import Settings
+from core.config import resolve
+from core.evaluation import SerialEvaluator
+from core.evolution import CURVE_COLUMNS, Evolution
+from tests.services import TcpProxy
+
+pytestmark = [pytest.mark.postgres, pytest.mark.slow]
+
+#: 3x3x3 robots for 30 s simulated: ~0.1 s each, so the run lasts several seconds in process.
+REQUEST: dict[str, Any] = {
+    "preset": "quick",
+    "seed": 5,
+    "population": 10,
+    "generations": 8,
+    "sim": {"duration": 30.0},
+}
+LEASE_SECONDS = 2.0
+
+
+@pytest.fixture(scope="module")
+def undisturbed() -> list[dict[str, Any]]:
+    evolution = Evolution.start(resolve(REQUEST))
+    evolution.run(SerialEvaluator())
+    return evolution.curve()
+
+
+def make_client(url: str) -> TestClient:
+    settings = Settings(database_url=url, poll_seconds=0.1, lease_seconds=LEASE_SECONDS)
+    return TestClient(create_app(settings, lambda _s: SerialEvaluator()))
+
+
+HALF_WRITTEN = text(
+    "SELECT g.generation FROM generations g JOIN individuals i "
+    "ON i.run_id = g.run_id AND i.generation = g.generation "
+    "WHERE g.run_id = :run GROUP BY g.generation "
+    "HAVING count(*) <> :population OR sum(CASE WHEN i.status = 'pending' THEN 1 ELSE 0 END) > 0"
+)
+
+
+class Watcher:
+    """Checks, over its own connection, that every committed generation is whole."""
+
+    def __init__(self, url: str, run_id: int) -> None:
+        self.engine = create_engine(url.replace("postgresql://", "postgresql+psycopg://", 1))
+        self.run_id = run_id
+        self.checks = 0
+
+    def check(self) -> None:
+        params = {"run": self.run_id, "population": REQUEST["population"]}
+        with self.engine.connect() as connection:
+            broken = connection.execute(HALF_WRITTEN, params).scalars().all()
+        assert broken == [], f"generations committed half written: {broken}"
+        self.checks += 1
+
+
+def wait_done(client: TestClient, run_id: int, timeout: float, watcher: Watcher) -> dict:
+    deadline = time.monotonic() + timeout
+    while True:
+        response = client.get(f"/runs/{run_id}")
+        if response.status_code == 200 and response.json()["status"] not in ("queued", "running"):
+            return response.json()
+        assert time.monotonic() < deadline, f"run not done in {timeout:.0f} s: {response.text}"
+        watcher.check()
+        time.sleep(0.1)
+
+
+def check_completed(client: TestClient, run: dict, undisturbed: list[dict[str, Any]]) -> None:
+    assert run["status"] == "completed", run
+    items = client.get(f"/runs/{run['id']}/individuals", params={"limit": 5000}).json()["items"]
+    keys = sorted((i["generation"], i["index"]) for i in items)
+    assert keys == [
+        (g, i) for g in range(REQUEST["generations"]) for i in range(REQUEST["population"])
+    ]
+    assert all(i["status"] != "pending" for i in items)
+    curve = client.get(f"/runs/{run['id']}/curve").json()["generations"]
+    assert [{c: row[c] for c in CURVE_COLUMNS} for row in curve] == [
+        {c: row[c] for c in CURVE_COLUMNS} for row in undisturbed
+    ]
+
+
+@pytest.fixture
+def database(postgres_url: str) -> Iterator[str]:
+    from api.db import Database
+
+    db = Database(postgres_url)
+    db.upgrade()
+    db.dispose()
+    yield postgres_url
+
+
+def test_connections_terminated_again_and_again_during_commits(
+    database: str, undisturbed: list[dict[str, Any]]
+) -> None:
+    admin = create_engine(
+        database.replace("postgresql://", "postgresql+psycopg://", 1), isolation_level="AUTOCOMMIT"
+    )
+    name = make_url(database).database
+    kills: list[int] = []
+    stop = threading.Event()
+
+    def terminate() -> None:
+        rng = random.Random(7)
+        with admin.connect() as connection:
+            while not stop.wait(rng.uniform(0.02, 0.3)):
+                ended = connection.execute(
+                    text(
+                        "SELECT count(pg_terminate_backend(pid)) FROM pg_stat_activity "
+                        "WHERE datname = :name AND pid <> pg_backend_pid() "
+                        "AND application_name <> 'watcher'"
+                    ),
+                    {"name": name},
+                ).scalar_one()
+                kills.append(int(ended))
+
+    started = time.monotonic()
+    with make_client(database) as client:
+        run_id = client.post("/runs", json=REQUEST).json()["id"]
+        watcher = Watcher(database + "?application_name=watcher", run_id)
+        killer = threading.Thread(target=terminate, daemon=True)
+        killer.start()
+        while time.monotonic() - started < 6.0:  # several generations' worth of terminations
+            watcher.check()
+            time.sleep(0.1)
+        stop.set()
+        killer.join(5)
+        stopped = time.monotonic()
+        run = wait_done(client, run_id, timeout=90, watcher=watcher)
+        print(
+            f"\n[pg] {len(kills)} rounds of pg_terminate_backend ended {sum(kills)} connections "
+            f"in 6 s; the run completed {time.monotonic() - stopped:.2f} s after they stopped "
+            f"({time.monotonic() - started:.2f} s in all, {run['takeovers']} takeovers, "
+            f"{watcher.checks} whole-generation checks)"
+        )
+        assert sum(kills) > 0, "no connection was ever terminated: the fault did not happen"
+        check_completed(client, run, undisturbed)
+    admin.dispose()
+    watcher.engine.dispose()
+
+
+def test_database_host_cut_off_then_back(database: str, undisturbed: list[dict[str, Any]]) -> None:
+    url = make_url(database)
+    proxy = TcpProxy((url.host or "127.0.0.1", url.port or 5432))
+    through = url.set(host="127.0.0.1", port=proxy.port).render_as_string(False)
+    with make_client(through) as client:
+        run_id = client.post("/runs", json=REQUEST).json()["id"]
+        watcher = Watcher(database, run_id)
+        deadline = time.monotonic() + 30
+        while client.get(f"/runs/{run_id}").json()["progress"]["generation"] < 1:
+            assert time.monotonic() < deadline, "no generation committed before the cut"
+            time.sleep(0.05)
+        proxy.down()
+        down = time.monotonic()
+        answers = 0
+        while time.monotonic() - down < 3.0:
+            for path in (f"/runs/{run_id}", "/healthz", "/runs"):
+                response = client.get(path)
+                assert response.status_code == 503, (path, response.text)
+                assert response.headers["content-type"] == "application/json"
+                assert "Traceback" not in response.text
+                answers += 1
+            watcher.check()
+            time.sleep(0.2)
+        proxy.up()
+        up = time.monotonic()
+        while client.get("/healthz").status_code != 200:
+            assert time.monotonic() - up < 10, "the API did not recover by itself"
+            time.sleep(0.05)
+        answering = time.monotonic() - up
+        run = wait_done(client, run_id, timeout=90, watcher=watcher)
+        print(
+            f"\n[pg] database cut off for {up - down:.2f} s ({answers} answers, all 503 JSON); "
+            f"the API answered again {answering:.2f} s after it came back, and the run completed "
+            f"{time.monotonic() - up:.2f} s after ({run['takeovers']} takeovers)"
+        )
+        check_completed(client, run, undisturbed)
+    proxy.down()
+    watcher.engine.dispose()
