@@ -7,6 +7,7 @@ individual stored once.
 from __future__ import annotations
 
 import os
+import random
 import signal
 import socket
 import subprocess
@@ -277,3 +278,57 @@ def test_sigkill_mid_generation_then_restart_resumes_with_the_same_curve(
         assert {c: got[c] for c in CURVE_COLUMNS} == {c: want[c] for c in CURVE_COLUMNS}
     assert run["progress"]["evaluations"] == evolution.evaluations
     assert run["progress"]["saved"] == evolution.saved
+
+
+@pytest.mark.slow
+def test_sigkill_again_and_again_at_random_moments(
+    start_server: Callable[[], Server], engine: Engine
+) -> None:
+    """Three servers in a row are SIGKILLed at random moments of the run (commits, batches,
+    scheduling: wherever the moment falls); after each kill every committed generation is
+    whole in the database, and the fourth server finishes the run with the undisturbed curve."""
+    rng = random.Random(11)
+    server = start_server()
+    run_id = server.client.post("/runs", json=REQUEST).json()["id"]
+    moments = []
+    for _ in range(3):
+        time.sleep(rng.uniform(0.5, 2.5))  # the run goes on under the server for this long
+        server.kill()
+        state = _database_state(engine, run_id)
+        moments.append(f"{state['committed']}:{state['in_progress']}")
+        with engine.connect() as connection:
+            half = connection.execute(
+                text(
+                    "SELECT i.generation FROM individuals i JOIN runs r ON r.id = i.run_id "
+                    "WHERE i.run_id = :run AND i.generation < r.generations_done "
+                    "AND i.status = 'pending'"
+                ),
+                {"run": run_id},
+            ).all()
+            whole = connection.scalar(
+                text("SELECT count(*) FROM generations WHERE run_id = :run"), {"run": run_id}
+            )
+        assert half == [], f"committed generations with pending individuals: {half}"
+        assert whole == state["committed"], "a generation row without its commit"
+        server = start_server()
+    restarted = time.monotonic()
+    deadline = restarted + 120
+    while (run := server.client.get(f"/runs/{run_id}").json())["status"] in ("queued", "running"):
+        assert time.monotonic() < deadline, f"run not finished:\n{server.tail()}"
+        time.sleep(0.1)
+    print(
+        f"\nkilled at (committed:in progress) {moments}; the last server finished the run "
+        f"{time.monotonic() - restarted:.2f} s after it started ({run['takeovers']} takeovers)"
+    )
+    assert run["status"] == "completed", run
+    curve = server.client.get(f"/runs/{run_id}/curve").json()["generations"]
+    evolution = Evolution.start(resolve(REQUEST))
+    evolution.run(SerialEvaluator())
+    assert [{c: row[c] for c in CURVE_COLUMNS} for row in curve] == [
+        {c: row[c] for c in CURVE_COLUMNS} for row in evolution.curve()
+    ]
+    individuals = _individuals(server.client, run_id)
+    assert sorted((i["generation"], i["index"]) for i in individuals) == [
+        (g, i) for g in range(GENERATIONS) for i in range(POPULATION)
+    ]
+    assert all(i["status"] != "pending" for i in individuals)
