@@ -100,3 +100,33 @@ def test_bad_arguments_exit_nonzero(examples: Path, tmp_path: Path) -> None:
     done = softevo("simulate", str(tmp_path / "missing.json"))
     assert done.returncode == 1 and "cannot read" in done.stderr
     assert softevo("fly").returncode == 2
+
+
+HOSTILE = {
+    "deep": "[" * 100_000 + "]" * 100_000,
+    "huge": '{"voxels": ["' + "hard" * 3_000_000 + '"]}',
+    "nan": '{"format": "softevo.robot/1", "shape": [1, 1, 1], "voxels": ["hard"],'
+    ' "sim": {"duration": NaN}}',
+    "nested label": '{"format": "softevo.robot/1", "shape": [1, 1, 1], "voxels": [["hard"]]}',
+    "shape string": '{"format": "softevo.robot/1", "shape": "1x1x1", "voxels": ["hard"]}',
+}
+
+
+@pytest.mark.parametrize(
+    ("name", "words"),
+    [
+        ("deep", "nested too deeply"),
+        ("huge", "more than the limit"),
+        ("nan", "NaN"),
+        ("nested label", "voxels.0"),
+        ("shape string", "shape"),
+    ],
+)
+def test_hostile_robot_files_are_refused_in_one_line(tmp_path: Path, name: str, words: str) -> None:
+    path = tmp_path / "hostile.json"
+    path.write_text(HOSTILE[name])
+    done = softevo("simulate", str(path))
+    assert done.returncode == 1 and done.stdout == ""
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and len(lines[0]) < 500, done.stderr[:1000]
+    assert words in lines[0], lines[0]
