@@ -76,9 +76,8 @@ def engine(database_url: str) -> Iterator[Engine]:
     engine.dispose()
 
 
-@pytest.fixture
-def start_server(database_url: str, tmp_path: Path) -> Iterator[Callable[[], Server]]:
-    """`start_server()`: serve the test's database on a free port; every server dies at the end."""
+def serve(database_url: str, log: Path) -> Server:
+    """Start `softevo serve` on the database and a free port; return once /healthz says ok."""
     env = {
         **os.environ,
         "SOFTEVO_DATABASE_URL": database_url,
@@ -87,32 +86,38 @@ def start_server(database_url: str, tmp_path: Path) -> Iterator[Callable[[], Ser
         "SOFTEVO_WORKERS": "1",
         "SOFTEVO_BATCH_SIZE": "2",
     }
+    port = _free_port()
+    with log.open("wb") as out:
+        process = subprocess.Popen(
+            [sys.executable, "-m", "softevo.cli", "serve", "--port", str(port)],
+            env=env,
+            stdout=out,
+            stderr=subprocess.STDOUT,
+        )
+    server = Server(process, f"http://127.0.0.1:{port}", log)
+    deadline = time.monotonic() + 60
+    while True:
+        if process.poll() is not None:
+            pytest.fail(f"softevo serve exited with {process.returncode}:\n{server.tail()}")
+        try:
+            if server.client.get("/healthz").status_code == 200:
+                return server
+        except httpx.TransportError:
+            pass
+        if time.monotonic() > deadline:
+            server.kill()
+            pytest.fail(f"softevo serve did not answer /healthz in 60 s:\n{server.tail()}")
+        time.sleep(0.1)
+
+
+@pytest.fixture
+def start_server(database_url: str, tmp_path: Path) -> Iterator[Callable[[], Server]]:
+    """`start_server()`: serve the test's database on a free port; every server dies at the end."""
     servers: list[Server] = []
 
     def start() -> Server:
-        port = _free_port()
-        log = tmp_path / f"server-{len(servers)}.log"
-        with log.open("wb") as out:
-            process = subprocess.Popen(
-                [sys.executable, "-m", "softevo.cli", "serve", "--port", str(port)],
-                env=env,
-                stdout=out,
-                stderr=subprocess.STDOUT,
-            )
-        server = Server(process, f"http://127.0.0.1:{port}", log)
-        servers.append(server)
-        deadline = time.monotonic() + 60
-        while True:
-            if process.poll() is not None:
-                pytest.fail(f"softevo serve exited with {process.returncode}:\n{server.tail()}")
-            try:
-                if server.client.get("/healthz").status_code == 200:
-                    return server
-            except httpx.TransportError:
-                pass
-            if time.monotonic() > deadline:
-                pytest.fail(f"softevo serve did not answer /healthz in 60 s:\n{server.tail()}")
-            time.sleep(0.1)
+        servers.append(serve(database_url, tmp_path / f"server-{len(servers)}.log"))
+        return servers[-1]
 
     try:
         yield start
@@ -332,3 +337,94 @@ def test_sigkill_again_and_again_at_random_moments(
         (g, i) for g in range(GENERATIONS) for i in range(POPULATION)
     ]
     assert all(i["status"] != "pending" for i in individuals)
+
+
+#: The generation commit's statements (`Driver._commit`): the cached copies' fitness (an UPDATE of
+#: individuals without eval_seconds or worker, unlike a batch's fitness), then the generation row.
+IN_COMMIT = text(
+    "SELECT query, (SELECT generations_done FROM runs WHERE id = :run) "
+    "FROM pg_stat_activity WHERE application_name = :app "
+    "AND xact_start IS NOT NULL AND state IN ('active', 'idle in transaction') "
+    "AND ((query LIKE 'UPDATE individuals SET fitness%' AND query NOT LIKE '%worker%') "
+    "OR query LIKE 'INSERT INTO generations%')"
+)
+
+
+@pytest.mark.slow
+@pytest.mark.postgres
+def test_sigkill_inside_the_generation_commit_transaction(
+    postgres_url: str, tmp_path: Path
+) -> None:
+    """PostgreSQL shows what each connection is doing: the server is SIGKILLed at the moment
+    its connection is inside a generation's commit transaction, which must then roll back as a
+    whole; a new server finishes the run with the undisturbed curve."""
+    Database(postgres_url).upgrade()
+    url = f"{postgres_url}?application_name=softevo-crash"
+    watch = create_engine(normalise_url(postgres_url), isolation_level="AUTOCOMMIT")
+    servers: list[Server] = []
+    caught: tuple[int, str] | None = None
+    try:
+        for attempt in range(5):  # a commit lasts milliseconds: it may slip by; try again
+            servers.append(serve(url, tmp_path / f"server-{attempt}.log"))
+            server = servers[-1]
+            if attempt == 0:
+                run_id = server.client.post("/runs", json=REQUEST).json()["id"]
+            with watch.connect() as connection:
+                deadline = time.monotonic() + 30
+                while time.monotonic() < deadline and server.process.poll() is None:
+                    row = connection.execute(
+                        IN_COMMIT, {"app": "softevo-crash", "run": run_id}
+                    ).first()
+                    if row is not None:
+                        os.kill(server.process.pid, signal.SIGKILL)
+                        server.kill()
+                        break
+                else:
+                    pytest.fail(f"no generation commit seen in 30 s:\n{server.tail()}")
+                done, generations = connection.execute(
+                    text(
+                        "SELECT r.generations_done, (SELECT count(*) FROM generations g "
+                        "WHERE g.run_id = r.id) FROM runs r WHERE r.id = :run"
+                    ),
+                    {"run": run_id},
+                ).one()
+                cached = connection.scalar(
+                    text(
+                        "SELECT count(*) FROM individuals WHERE run_id = :run "
+                        "AND generation = :g AND status = 'cached'"
+                    ),
+                    {"run": run_id, "g": done},
+                )
+            assert done == generations, "the run's counter and its generation rows disagree"
+            assert cached == 0, "a rolled-back commit left cached fitness behind"
+            if done == row[1]:  # the commit seen in flight never landed: it was rolled back
+                caught = (done, row[0].split(" SET")[0].split(" (")[0])
+                break
+        assert caught is not None, "never caught inside a commit in 5 tries"
+        final = serve(url, tmp_path / "server-final.log")
+        servers.append(final)
+        restarted = time.monotonic()
+        while (run := final.client.get(f"/runs/{run_id}").json())["status"] in (
+            "queued",
+            "running",
+        ):
+            assert time.monotonic() - restarted < 120, f"not finished:\n{final.tail()}"
+            time.sleep(0.1)
+        print(
+            f"\nSIGKILLed inside the commit of generation {caught[0]} ({caught[1]}); rolled "
+            f"back whole; the next server finished {time.monotonic() - restarted:.2f} s later"
+        )
+        assert run["status"] == "completed", run
+        curve = final.client.get(f"/runs/{run_id}/curve").json()["generations"]
+        evolution = Evolution.start(resolve(REQUEST))
+        evolution.run(SerialEvaluator())
+        assert [{c: row[c] for c in CURVE_COLUMNS} for row in curve] == [
+            {c: row[c] for c in CURVE_COLUMNS} for row in evolution.curve()
+        ]
+        individuals = _individuals(final.client, run_id)
+        assert len(individuals) == GENERATIONS * POPULATION
+        assert all(i["status"] != "pending" for i in individuals)
+    finally:
+        for server in servers:
+            server.kill()
+        watch.dispose()
