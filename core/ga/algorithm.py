@@ -17,6 +17,10 @@ One generation (g > 0), with P the population size:
    bounded Gaussian step of `mutation_sigma` times their range).
 4. With `elitism`, the best individual of g-1 is always among the survivors, so best-so-far never
    falls. (Grouped truncation keeps each group's best, hence always the overall best.)
+
+Two baselines share the machinery (`algorithm`), so they run through the same service, cache and
+accounting: `random` search (P new random genomes every generation) and `hillclimb` (the best of
+g-1 and P-1 mutants of it).
 """
 
 from __future__ import annotations
@@ -39,6 +43,12 @@ class GAConfig(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 
+    algorithm: Literal["ga", "random", "hillclimb"] = Field(
+        "ga",
+        description="ga: the genetic algorithm below; random: P new random genomes every "
+        "generation (random search); hillclimb: the best of the last generation and P-1 "
+        "mutants of it (a (1+lambda) hill climber). The last two are baselines.",
+    )
     population: int = Field(25, ge=2, le=10_000)
     generations: int = Field(100, ge=1, le=100_000)
     selection: Literal["grouped", "tournament", "roulette"] = "grouped"
@@ -54,7 +64,7 @@ class GAConfig(BaseModel):
 
     @model_validator(mode="after")
     def _room_for_children(self) -> GAConfig:
-        if self.n_immigrants >= self.population:
+        if self.algorithm == "ga" and self.n_immigrants >= self.population:
             raise ValueError(
                 f"immigrants: {self.immigrants} of {self.population} leaves no room for "
                 "survivors and children"
@@ -212,8 +222,12 @@ class GeneticAlgorithm:
         rng = generation_rng(state.seed, state.generation)
         if state.generation == 0 or state.previous is None or state.previous_fitness is None:
             return [Individual(encoding.random(rng), "random") for _ in range(config.population)]
+        if config.algorithm == "random":
+            return [Individual(encoding.random(rng), "random") for _ in range(config.population)]
         parents = state.previous
         fitness = np.asarray(state.previous_fitness, dtype=np.float64)
+        if config.algorithm == "hillclimb":
+            return self._climb(parents, fitness, rng)
         if config.selection == "grouped":
             survivors = operators.grouped_truncation(fitness, config.groups, config.survival, rng)
         elif config.elitism:
@@ -237,6 +251,25 @@ class GeneticAlgorithm:
             *children[:n_children],
             *(Individual(encoding.random(rng), "immigrant") for _ in range(config.n_immigrants)),
         ]
+
+    def _climb(
+        self, parents: list[Individual], fitness: np.ndarray, rng: np.random.Generator
+    ) -> list[Individual]:
+        """The best of the last generation (so the best so far) and P-1 mutants of it, every
+        one mutated with the GA's mutation (`mutation_genes`, `mutation_sigma`)."""
+        config, encoding = self.config, self.encoding
+        best = int(operators.rank_order(fitness)[0])
+        parent = parents[best].genome
+        climbers = [Individual(parent, "survivor", (best,))]
+        for _ in range(config.population - 1):
+            discrete = operators.mutate_discrete(
+                np.array(parent.discrete), encoding.alphabet, max(1, config.mutation_genes), rng
+            )
+            real = operators.mutate_real(
+                np.array(parent.real), encoding.real_bounds, config.mutation_sigma, rng
+            )
+            climbers.append(Individual(encoding.genome(discrete, real), "copy+mutation", (best,)))
+        return climbers
 
     def _mate(
         self,

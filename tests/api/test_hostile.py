@@ -84,6 +84,7 @@ def test_malformed_bodies_get_a_clear_error_and_queue_nothing(
         ({"sim": {"duration": 1e6}}, "sim"),
         ({"sim": {"dt": 1e-12}}, "sim"),
         ({"population": 1000, "generations": 10_000}, "generations"),
+        ({"algorithm": "annealing"}, "algorithm"),
     ],
 )
 def test_settings_that_would_explode_are_refused_before_queuing(
