@@ -14,7 +14,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import NoReturn
 
-from softevo import __version__, run_command, service_commands
+from softevo import __version__, reproduce, run_command, service_commands
 
 
 class CommandError(Exception):
@@ -68,6 +68,7 @@ def build_parser() -> argparse.ArgumentParser:
         dest="command", required=True, metavar="COMMAND", parser_class=Parser
     )
     run_command.add_parser(commands)
+    reproduce.add_parser(commands)
     service_commands.add_parsers(commands)
 
     simulate = commands.add_parser(

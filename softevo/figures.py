@@ -1,0 +1,118 @@
+"""Publication figures from plain rows (the curve's, the individuals'), the paper's Figure 4(b)-(d).
+
+Nothing here knows where the rows came from (a results folder, the REST API, a sweep), so the
+CLI, the API and `softevo reproduce` draw the same figures. matplotlib is imported on first use,
+with the Agg backend: no screen needed, and start-up of the commands that never plot stays fast.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+Row = Mapping[str, Any]
+
+
+def _pyplot() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    plt.rcParams.update(
+        {
+            "figure.dpi": 110,
+            "savefig.dpi": 150,
+            "font.size": 9,
+            "axes.grid": True,
+            "grid.alpha": 0.3,
+            "axes.spines.top": False,
+            "axes.spines.right": False,
+        }
+    )
+    return plt
+
+
+def _value(row: Row, key: str) -> float:
+    value = row.get(key)
+    return math.nan if value is None else float(value)
+
+
+def curve_figure(rows: Sequence[Row], title: str = "") -> Figure:
+    """Figure 4(b): best, mean, median and best so far per generation (m/s)."""
+    plt = _pyplot()
+    figure, axes = plt.subplots(figsize=(5.5, 3.4))
+    generations = [int(row["generation"]) for row in rows]
+    for key, style in (("best_so_far", "-"), ("best", "-"), ("mean", "--"), ("median", ":")):
+        axes.plot(generations, [_value(r, key) for r in rows], style, label=key.replace("_", " "))
+    axes.set_xlabel("generation")
+    axes.set_ylabel("speed (m/s)")
+    axes.set_title(title or "learning curve")
+    axes.legend(frameon=False)
+    figure.tight_layout()
+    return figure
+
+
+def population_figure(individuals: Sequence[Row], title: str = "") -> Figure:
+    """Figure 4(c): every individual's speed per generation; failed ones as red crosses at 0."""
+    plt = _pyplot()
+    figure, axes = plt.subplots(figsize=(5.5, 3.4))
+    ok = [(i["generation"], i["fitness"]) for i in individuals if i.get("fitness") is not None]
+    failed = [i["generation"] for i in individuals if i.get("fitness") is None]
+    if ok:
+        x, y = zip(*ok, strict=True)
+        axes.scatter(x, y, s=6, alpha=0.5, color="tab:blue", label="individual", linewidths=0)
+    if failed:
+        axes.scatter(
+            failed,
+            [0.0] * len(failed),
+            s=12,
+            marker="x",
+            color="tab:red",
+            label=f"failed ({len(failed)})",
+        )
+    axes.set_xlabel("generation")
+    axes.set_ylabel("speed (m/s)")
+    axes.set_title(title or "population")
+    axes.legend(frameon=False, loc="lower right")
+    figure.tight_layout()
+    return figure
+
+
+def diversity_figure(rows: Sequence[Row], title: str = "") -> Figure:
+    """Figure 4(d): the population's genetic diversity per generation."""
+    plt = _pyplot()
+    figure, axes = plt.subplots(figsize=(5.5, 3.0))
+    axes.plot([int(r["generation"]) for r in rows], [_value(r, "diversity") for r in rows])
+    axes.set_xlabel("generation")
+    axes.set_ylabel("diversity")
+    axes.set_ylim(bottom=0)
+    axes.set_title(title or "diversity")
+    figure.tight_layout()
+    return figure
+
+
+def save(figure: Figure, path: Path) -> Path:
+    """Write a PNG and free the figure (many figures in one process would otherwise pile up)."""
+    plt = _pyplot()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, format="png")
+    plt.close(figure)
+    return path
+
+
+def run_figures(
+    curve: Sequence[Row], individuals: Sequence[Row], out: Path, title: str = ""
+) -> list[Path]:
+    """The three figures of one run into `out`: curve.png, population.png, diversity.png."""
+    suffix = f": {title}" if title else ""
+    return [
+        save(curve_figure(curve, "learning curve" + suffix), out / "curve.png"),
+        save(population_figure(individuals, "population" + suffix), out / "population.png"),
+        save(diversity_figure(curve, "diversity" + suffix), out / "diversity.png"),
+    ]
