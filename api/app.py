@@ -26,7 +26,7 @@ from api import storage
 from api.body_limit import BodyLimitMiddleware
 from api.coordinator import Coordinator
 from api.db import Database, alembic_config, current_revision
-from api.routes import meta, runs, sweeps
+from api.routes import meta, runs, sweeps, views
 from api.settings import Settings, get_settings
 from api.validation import RequestError
 from core.evaluator import Evaluator
@@ -102,6 +102,7 @@ def create_app(
     )
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.limits.max_body_bytes)
     app.include_router(runs.router)
+    app.include_router(views.router)
     app.include_router(sweeps.router)
     app.include_router(meta.router)
     _install_error_handlers(app)

@@ -31,7 +31,7 @@ from typing import Any
 
 import httpx
 
-from softevo import figures
+from core import figures
 
 PAPER_NINE = [
     (3, 3, 6),

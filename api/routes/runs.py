@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import csv
 import io
-import math
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Body, Path, Query, Request, Response, status
@@ -13,6 +12,7 @@ from fastapi.responses import StreamingResponse
 from api import storage
 from api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TokenDep
 from api.events import event_stream
+from api.replay import replay
 from api.schemas import (
     Curve,
     IndividualDetail,
@@ -216,19 +216,12 @@ def get_replay(
     fps: Annotated[float, Query(ge=0.1, le=120)] = 30.0,
 ) -> dict[str, Any]:
     """Frames of mass positions (and the springs) of the best robot, for a 3D viewer."""
-    from core.physics import simulate  # the physics is loaded only when a replay is asked for
-
     robot, best = _best_robot(db, run_id)
-    record_every = max(1, round(1.0 / (fps * robot.sim.dt)))
-    result, trajectory = simulate(robot, record_every=record_every)
-    assert trajectory is not None
     return {
         "run_id": run_id,
         "fitness": best["fitness"],
         "generation": best["generation"],
-        "speed": result.speed if math.isfinite(result.speed) else None,
-        "robot": robot_to_json(robot),
-        **trajectory.to_json(),
+        **replay(robot, fps),
     }
 
 

@@ -33,14 +33,19 @@ class Trajectory:
     times: np.ndarray
     frames: np.ndarray
     springs: np.ndarray  # [S, 2] mass indices
-    stiffness: np.ndarray  # [S] (N/m), to colour springs by material
+    stiffness: np.ndarray  # [S] (N/m), to colour passive springs by material
+    phase: np.ndarray | None = None  # [S] actuation phase (rad), NaN for a passive spring
 
     def to_json(self) -> dict:
+        phase = None if self.phase is None else [
+            None if not math.isfinite(p) else round(p, 6) for p in self.phase.tolist()
+        ]  # fmt: skip
         return {
             "format": "softevo.trajectory/1",
             "times": [round(t, 9) for t in self.times.tolist()],
             "springs": self.springs.tolist(),
             "stiffness": self.stiffness.tolist(),
+            "phase": phase,
             "frames": np.round(self.frames, 6).tolist(),
         }
 
@@ -150,6 +155,11 @@ def simulate(
         frames=frames.transpose(0, 2, 1).copy(),
         springs=springs,
         stiffness=mech.stiffness,
+        phase=np.where(
+            np.hypot(mech.amp_sin, mech.amp_cos) > 0,
+            np.arctan2(mech.amp_cos, mech.amp_sin),
+            np.nan,
+        ),
     )
     return result, trajectory
 

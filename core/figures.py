@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, BinaryIO
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -97,12 +97,16 @@ def diversity_figure(rows: Sequence[Row], title: str = "") -> Figure:
     return figure
 
 
-def save(figure: Figure, path: Path) -> Path:
+def write(figure: Figure, target: BinaryIO | Path) -> None:
     """Write a PNG and free the figure (many figures in one process would otherwise pile up)."""
     plt = _pyplot()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path, format="png")
+    figure.savefig(target, format="png")
     plt.close(figure)
+
+
+def save(figure: Figure, path: Path) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write(figure, path)
     return path
 
 

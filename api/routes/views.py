@@ -1,0 +1,70 @@
+"""What the dashboard and papers look at: a replay of any individual, and the run's figures as PNG.
+
+Both compute on request (a simulation, a matplotlib figure) in the API process, so each is
+bounded: a replay by the run's own simulated duration (under SOFTEVO_MAX_DURATION) and the frame
+rate cap, a figure by the run's size (under SOFTEVO_MAX_EVALUATIONS individuals).
+"""
+
+from __future__ import annotations
+
+import io
+from typing import Annotated, Any, Literal
+
+from fastapi import APIRouter, Path, Query, Response
+
+from api import storage
+from api.deps import DatabaseDep
+from api.replay import replay
+from api.routes.runs import NOT_FOUND, RunId
+from core.config import RunConfig
+from core.genome import Genome
+
+router = APIRouter(prefix="/runs", tags=["runs"])
+
+Fps = Annotated[float, Query(ge=0.1, le=120, description="frames per simulated second")]
+
+
+@router.get("/{run_id}/individuals/{number}/replay", responses=NOT_FOUND)
+def get_individual_replay(
+    run_id: RunId,
+    number: Annotated[int, Path(ge=0, le=2**31 - 1, description="generation * P + index")],
+    db: DatabaseDep,
+    fps: Fps = 30.0,
+) -> dict[str, Any]:
+    """Frames of mass positions (and the springs) of individual `number`, for a 3D viewer."""
+    run = storage.get_run(db, run_id)
+    data = storage.get_individual(db, run, number)
+    config = RunConfig.model_validate(run.config)
+    robot = config.make_encoding().to_robot(Genome.from_json(data["genome"]), config.sim)
+    return {
+        "run_id": run_id,
+        "number": number,
+        "generation": data["generation"],
+        "fitness": data["fitness"],
+        **replay(robot, fps),
+    }
+
+
+@router.get(
+    "/{run_id}/figures/{kind}.png",
+    responses={**NOT_FOUND, 200: {"content": {"image/png": {}}}},
+    response_class=Response,
+)
+def get_figure(
+    run_id: RunId, kind: Literal["curve", "population", "diversity"], db: DatabaseDep
+) -> Response:
+    """The learning curve, population dot plot or diversity chart as a publication PNG."""
+    from core import figures
+
+    run = storage.get_run(db, run_id)
+    title = f"run {run_id} ({'x'.join(map(str, run.config['shape']))}, seed {run.seed})"
+    if kind == "population":
+        items, _ = storage.list_individuals(db, run, None, 0, 10**9)
+        figure = figures.population_figure(items, f"population: {title}")
+    elif kind == "curve":
+        figure = figures.curve_figure(storage.curve(db, run_id), f"learning curve: {title}")
+    else:
+        figure = figures.diversity_figure(storage.curve(db, run_id), f"diversity: {title}")
+    buffer = io.BytesIO()
+    figures.write(figure, buffer)
+    return Response(buffer.getvalue(), media_type="image/png")
