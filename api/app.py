@@ -22,7 +22,7 @@ from fastapi.responses import JSONResponse
 from sqlalchemy.exc import InterfaceError, OperationalError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
-from api import storage
+from api import dashboard, storage
 from api.body_limit import BodyLimitMiddleware
 from api.coordinator import Coordinator
 from api.db import Database, alembic_config, current_revision
@@ -105,6 +105,7 @@ def create_app(
     app.include_router(views.router)
     app.include_router(sweeps.router)
     app.include_router(meta.router)
+    dashboard.install(app)
     _install_error_handlers(app)
     return app
 

@@ -43,25 +43,32 @@ def _value(row: Row, key: str) -> float:
     return math.nan if value is None else float(value)
 
 
-def curve_figure(rows: Sequence[Row], title: str = "") -> Figure:
-    """Figure 4(b): best, mean, median and best so far per generation (m/s)."""
-    plt = _pyplot()
-    figure, axes = plt.subplots(figsize=(5.5, 3.4))
-    generations = [int(row["generation"]) for row in rows]
-    for key, style in (("best_so_far", "-"), ("best", "-"), ("mean", "--"), ("median", ":")):
-        axes.plot(generations, [_value(r, key) for r in rows], style, label=key.replace("_", " "))
+def _generation_axis(axes: Any) -> None:
+    from matplotlib.ticker import MaxNLocator
+
     axes.set_xlabel("generation")
+    axes.xaxis.set_major_locator(MaxNLocator(integer=True))
+
+
+def draw_curve(axes: Any, rows: Sequence[Row], title: str) -> None:
+    generations = [int(row["generation"]) for row in rows]
+    axes.plot(
+        generations,
+        [_value(r, "best_so_far") for r in rows],
+        color="black",
+        lw=2.6,
+        alpha=0.45,
+        label="best so far",
+    )
+    for key, style in (("best", "-"), ("mean", "--"), ("median", ":")):
+        axes.plot(generations, [_value(r, key) for r in rows], style, label=key)
+    _generation_axis(axes)
     axes.set_ylabel("speed (m/s)")
-    axes.set_title(title or "learning curve")
+    axes.set_title(title)
     axes.legend(frameon=False)
-    figure.tight_layout()
-    return figure
 
 
-def population_figure(individuals: Sequence[Row], title: str = "") -> Figure:
-    """Figure 4(c): every individual's speed per generation; failed ones as red crosses at 0."""
-    plt = _pyplot()
-    figure, axes = plt.subplots(figsize=(5.5, 3.4))
+def draw_population(axes: Any, individuals: Sequence[Row], title: str) -> None:
     ok = [(i["generation"], i["fitness"]) for i in individuals if i.get("fitness") is not None]
     failed = [i["generation"] for i in individuals if i.get("fitness") is None]
     if ok:
@@ -76,23 +83,53 @@ def population_figure(individuals: Sequence[Row], title: str = "") -> Figure:
             color="tab:red",
             label=f"failed ({len(failed)})",
         )
-    axes.set_xlabel("generation")
+    _generation_axis(axes)
     axes.set_ylabel("speed (m/s)")
-    axes.set_title(title or "population")
+    axes.set_title(title)
     axes.legend(frameon=False, loc="lower right")
+
+
+def draw_diversity(axes: Any, rows: Sequence[Row], title: str) -> None:
+    axes.plot([int(r["generation"]) for r in rows], [_value(r, "diversity") for r in rows])
+    _generation_axis(axes)
+    axes.set_ylabel("diversity")
+    axes.set_ylim(bottom=0)
+    axes.set_title(title)
+
+
+def _single(draw: Any, data: Sequence[Row], title: str, height: float = 3.4) -> Figure:
+    plt = _pyplot()
+    figure, axes = plt.subplots(figsize=(5.5, height))
+    draw(axes, data, title)
     figure.tight_layout()
     return figure
 
 
-def diversity_figure(rows: Sequence[Row], title: str = "") -> Figure:
+def curve_figure(rows: Sequence[Row], title: str = "learning curve") -> Figure:
+    """Figure 4(b): best, mean, median and best so far per generation (m/s)."""
+    return _single(draw_curve, rows, title)
+
+
+def population_figure(individuals: Sequence[Row], title: str = "population") -> Figure:
+    """Figure 4(c): every individual's speed per generation; failed ones as red crosses at 0."""
+    return _single(draw_population, individuals, title)
+
+
+def diversity_figure(rows: Sequence[Row], title: str = "diversity") -> Figure:
     """Figure 4(d): the population's genetic diversity per generation."""
+    return _single(draw_diversity, rows, title, height=3.0)
+
+
+def panel_figure(curve: Sequence[Row], individuals: Sequence[Row], title: str = "") -> Figure:
+    """All three, stacked, for one run: Figure 4(b)-(d) in one file."""
     plt = _pyplot()
-    figure, axes = plt.subplots(figsize=(5.5, 3.0))
-    axes.plot([int(r["generation"]) for r in rows], [_value(r, "diversity") for r in rows])
-    axes.set_xlabel("generation")
-    axes.set_ylabel("diversity")
-    axes.set_ylim(bottom=0)
-    axes.set_title(title or "diversity")
+    figure, axes = plt.subplots(3, 1, figsize=(6.0, 9.0), sharex=True)
+    suffix = f": {title}" if title else ""
+    draw_curve(axes[0], curve, "learning curve" + suffix)
+    draw_population(axes[1], individuals, "population" + suffix)
+    draw_diversity(axes[2], curve, "diversity" + suffix)
+    for upper in axes[:2]:
+        upper.set_xlabel("")
     figure.tight_layout()
     return figure
 

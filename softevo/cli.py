@@ -14,7 +14,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import NoReturn
 
-from softevo import __version__, reproduce, run_command, service_commands
+from softevo import __version__, plot_command, reproduce, run_command, service_commands
 
 
 class CommandError(Exception):
@@ -69,6 +69,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     run_command.add_parser(commands)
     reproduce.add_parser(commands)
+    plot_command.add_parser(commands)
     service_commands.add_parsers(commands)
 
     simulate = commands.add_parser(

@@ -6,6 +6,8 @@ interrupted run still has its partial results:
     curve.json        {"run": config, "generations": [rows]}, the same as `softevo run --json`
     best_robot.json   the fastest robot so far, a softevo.robot/1 file
     state.json        the genetic algorithm's state (JSON), for inspection or resuming
+    population.csv    every individual: generation, index, fitness (empty: failed), operator
+    curve.png, population.png, diversity.png   the run's figures, written at the end
 """
 
 from __future__ import annotations
@@ -56,6 +58,55 @@ def write_results(out: Path, evolution: Evolution) -> None:
         writer = csv.writer(handle)
         writer.writerow(CURVE_COLUMNS)
         for row in result["generations"]:
-            writer.writerow(["" if v is None or (isinstance(v, float) and math.isnan(v)) else v
-                             for v in (row[c] for c in CURVE_COLUMNS)])  # fmt: skip
+            writer.writerow(
+                [
+                    "" if v is None or (isinstance(v, float) and math.isnan(v)) else v
+                    for v in (row[c] for c in CURVE_COLUMNS)
+                ]
+            )
     os.replace(temporary, out / "curve.csv")
+
+
+POPULATION_COLUMNS = ("generation", "index", "fitness", "operator")
+
+
+def append_population(out: Path, evolution: Evolution) -> None:
+    """Add the generation just evaluated to population.csv (started afresh at generation 0)."""
+    state = evolution.algorithm.state
+    if state.previous is None or state.previous_fitness is None:
+        return
+    generation = state.generation - 1
+    path = out / "population.csv"
+    with path.open("w" if generation == 0 else "a", newline="", encoding="utf-8") as handle:
+        writer = csv.writer(handle)
+        if generation == 0:
+            writer.writerow(POPULATION_COLUMNS)
+        for index, (item, value) in enumerate(
+            zip(state.previous, state.previous_fitness, strict=True)
+        ):
+            writer.writerow(
+                [generation, index, "" if not math.isfinite(value) else value, item.operator]
+            )
+
+
+def read_results(folder: Path) -> tuple[dict[str, Any], list[dict[str, Any]], list[dict[str, Any]]]:
+    """(config, curve rows, individuals) of a `softevo run` output folder; ValueError if it is
+    not one."""
+    try:
+        curve = json.loads((folder / "curve.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError) as error:
+        raise ValueError(f"{folder}: no readable curve.json ({error})") from None
+    individuals: list[dict[str, Any]] = []
+    population = folder / "population.csv"
+    if population.exists():
+        with population.open(newline="", encoding="utf-8") as handle:
+            for row in csv.DictReader(handle):
+                individuals.append(
+                    {
+                        "generation": int(row["generation"]),
+                        "index": int(row["index"]),
+                        "fitness": float(row["fitness"]) if row["fitness"] else None,
+                        "operator": row["operator"],
+                    }
+                )
+    return curve.get("run", {}), curve.get("generations", []), individuals

@@ -11,10 +11,11 @@ from typing import Any
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
+from core import figures
 from core.config import PRESET_DESCRIPTIONS, PRESETS, ConfigError, resolve
 from core.evaluation import make_evaluator
 from core.evolution import Evolution
-from softevo.results import summary, write_results
+from softevo.results import append_population, read_results, summary, write_results
 
 
 def add_parser(commands: Any) -> None:
@@ -23,8 +24,9 @@ def add_parser(commands: Any) -> None:
         help="run a whole evolution experiment in this process",
         description=(
             "Evolve robots in this process with a live progress bar. After every generation "
-            "the output folder gets config.json, curve.csv, curve.json, best_robot.json and "
-            "state.json; Ctrl-C stops and keeps them."
+            "the output folder gets config.json, curve.csv, curve.json, best_robot.json, "
+            "state.json and population.csv, and at the end curve.png, population.png and "
+            "diversity.png; Ctrl-C stops and keeps them."
         ),
     )
     presets = "; ".join(f"{name}: {PRESET_DESCRIPTIONS[name]}" for name in sorted(PRESETS))
@@ -86,6 +88,7 @@ def run_command(args: argparse.Namespace) -> int:
 
             def report(update: Any) -> None:
                 write_results(out, evolution)
+                append_population(out, evolution)
                 progress.update(
                     task,
                     completed=update.stats.generation + 1,
@@ -96,12 +99,18 @@ def run_command(args: argparse.Namespace) -> int:
             evolution.run(evaluator, on_generation=report)
     except KeyboardInterrupt:
         done = len(evolution.algorithm.state.history)
-        print(f"interrupted after {done} of {config.generations} generations; "
-              f"partial results in {out}/", file=sys.stderr)  # fmt: skip
+        print(
+            f"interrupted after {done} of {config.generations} generations; "
+            f"partial results in {out}/",
+            file=sys.stderr,
+        )
         return 130
     finally:
         evaluator.close()
     write_results(out, evolution)
+    _, curve, individuals = read_results(out)
+    title = f"{'x'.join(map(str, config.shape))}, seed {config.seed}"
+    figures.run_figures(curve, individuals, out, title)
     result = summary(evolution)
     if args.json:
         print(json.dumps({**result, "out": str(out)}, allow_nan=False))

@@ -43,6 +43,28 @@ def test_run_writes_results_and_prints_json(tmp_path: Path) -> None:
         "--seed", "5", "--workers", "2", "--out", str(tmp_path / "again"), "--json",
     )  # fmt: skip
     assert json.loads(again.stdout)["generations"] == rows
+    # every individual, and the figures
+    with (out / "population.csv").open() as handle:
+        population = list(csv.DictReader(handle))
+    assert len(population) == 4 * 8
+    assert max(float(p["fitness"]) for p in population if p["fitness"]) == rows[-1]["best_so_far"]
+    for name in ("curve.png", "population.png", "diversity.png"):
+        assert (out / name).read_bytes()[:4] == b"\x89PNG"
+
+
+def test_plot_draws_a_results_folder_and_refuses_what_is_not_one(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    run = ("run", "--preset", "quick", "--generations", "3", "--population", "6", "--workers", "1")
+    assert softevo(*run, "--out", str(out)).returncode == 0
+    for kind in ("all", "curve", "population", "diversity"):
+        figure = tmp_path / f"{kind}.png"
+        done = softevo("plot", str(out), "--out", str(figure), "--kind", kind)
+        assert done.returncode == 0, done.stderr
+        assert figure.read_bytes()[:4] == b"\x89PNG" and figure.stat().st_size > 10_000
+    bad = softevo("plot", str(tmp_path / "nothing-here"), "--out", str(tmp_path / "x.png"))
+    assert bad.returncode == 1 and "neither a results folder nor a run id" in bad.stderr
+    away = softevo("plot", "3", "--url", "http://127.0.0.1:9", "--out", str(tmp_path / "y.png"))
+    assert away.returncode == 1 and "cannot read run 3" in away.stderr
 
 
 def test_bad_arguments_give_one_line_and_exit_2(tmp_path: Path) -> None:

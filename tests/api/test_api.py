@@ -70,6 +70,21 @@ def test_run_lifecycle_and_results(client: TestClient) -> None:
     assert replay["fitness"] == run["progress"]["best_fitness"]
     assert len(replay["frames"]) >= 10 and replay["springs"]
     assert replay["speed"] == pytest.approx(replay["fitness"], rel=1e-9)
+    assert len(replay["phase"]) == len(replay["springs"]) == len(replay["stiffness"])
+
+    # any individual replays, with the fitness it was given
+    one = client.get(f"/runs/{run_id}/individuals/7/replay", params={"fps": 10}).json()
+    assert one["number"] == 7 and one["generation"] == 1 and one["robot"] == detail["robot"]
+    if detail["fitness"] is not None:
+        assert one["speed"] == pytest.approx(detail["fitness"], rel=1e-9)
+    assert client.get(f"/runs/{run_id}/individuals/999/replay").status_code == 404
+    # and the figures come as PNG
+    for kind in ("curve", "population", "diversity"):
+        png = client.get(f"/runs/{run_id}/figures/{kind}.png")
+        assert png.status_code == 200 and png.headers["content-type"] == "image/png"
+        assert png.content[:8] == b"\x89PNG\r\n\x1a\n" and len(png.content) > 10_000
+    assert client.get(f"/runs/{run_id}/figures/other.png").status_code == 422
+    assert client.get("/runs/999/figures/curve.png").status_code == 404
 
 
 def test_a_run_through_the_api_has_the_curve_of_softevo_run(

@@ -1,0 +1,301 @@
+"""The dashboard in a real headless Chromium (Debian's, driven by playwright) against a live
+`softevo serve` with a finished run and a running one. Screenshots go to test-artifacts/."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import shutil
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import httpx
+import pytest
+
+from tests.services import free_port
+
+pytestmark = [pytest.mark.browser, pytest.mark.slow]
+ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"
+SMALL = {
+    "preset": "quick",
+    "seed": 2,
+    "population": 8,
+    "generations": 4,
+    "sim": {"duration": 1.5, "settle_time": 0.3},
+}
+LONG = {
+    "preset": "quick",
+    "seed": 3,
+    "population": 8,
+    "generations": 500,
+    "sim": {"duration": 3.0, "settle_time": 0.3},
+}
+
+
+def chromium() -> str:
+    for name in ("chromium", "chromium-browser"):
+        if path := shutil.which(name):
+            return path
+    if os.environ.get("CI") == "true":
+        pytest.fail("Debian's chromium is needed under CI and is not installed")
+    pytest.skip("chromium is not installed (apt-get install chromium)")
+
+
+@contextlib.contextmanager
+def serve(folder: Path, token: str | None = None) -> Iterator[httpx.Client]:
+    """`softevo serve` on a free port with a SQLite file in `folder`; a client for it."""
+    port = free_port()
+    env = {
+        **os.environ,
+        "SOFTEVO_DATABASE_URL": f"sqlite:///{folder / 'softevo.db'}",
+        "SOFTEVO_WORKERS": "1",
+        "SOFTEVO_POLL_SECONDS": "0.1",
+    }
+    env.pop("SOFTEVO_REDIS_URL", None)
+    env.pop("SOFTEVO_API_TOKEN", None)
+    if token:
+        env["SOFTEVO_API_TOKEN"] = token
+    log = (folder / "server.log").open("wb")
+    process = subprocess.Popen(
+        [sys.executable, "-m", "softevo.cli", "serve", "--port", str(port)],
+        env=env,
+        stdout=log,
+        stderr=subprocess.STDOUT,
+    )
+    client = httpx.Client(base_url=f"http://127.0.0.1:{port}", timeout=30)
+    try:
+        deadline = time.monotonic() + 60
+        while True:
+            assert process.poll() is None, (folder / "server.log").read_text()
+            try:
+                if client.get("/healthz").status_code == 200:
+                    break
+            except httpx.TransportError:
+                pass
+            assert time.monotonic() < deadline, "softevo serve did not start"
+            time.sleep(0.1)
+        yield client
+    finally:
+        process.terminate()
+        process.wait(20)
+        log.close()
+        client.close()
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[httpx.Client]:
+    with serve(tmp_path_factory.mktemp("dashboard")) as client:
+        yield client
+
+
+def wait(predicate: Any, timeout: float, what: str) -> None:
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        assert time.monotonic() < deadline, what
+        time.sleep(0.1)
+
+
+@pytest.fixture(scope="module")
+def runs(server: httpx.Client) -> Iterator[dict[str, int]]:
+    """A finished run and a running one (cancelled at the end)."""
+    done = server.post("/runs", json=SMALL).json()["id"]
+    wait(lambda: server.get(f"/runs/{done}").json()["status"] == "completed", 60, "run done")
+    running = server.post("/runs", json=LONG).json()["id"]
+    wait(
+        lambda: server.get(f"/runs/{running}").json()["progress"]["generation"] >= 1,
+        60,
+        "running run has a generation",
+    )
+    yield {"done": done, "running": running}
+    server.post(f"/runs/{running}/cancel")
+
+
+@pytest.fixture(scope="module")
+def page(server: httpx.Client) -> Iterator[Any]:
+    executable = chromium()
+    playwright_api = pytest.importorskip("playwright.sync_api")
+    base = str(server.base_url).rstrip("/")
+    outside: list[str] = []
+
+    def only_local(route: Any) -> None:
+        """Let through this machine's servers only; remember and abort anything else."""
+        url = route.request.url
+        if url.startswith(("http://127.0.0.1:", "data:")):
+            route.continue_()
+        else:
+            outside.append(url)
+            route.abort()
+
+    with playwright_api.sync_playwright() as playwright:
+        browser = playwright.chromium.launch(
+            executable_path=executable,
+            args=["--no-sandbox", "--enable-unsafe-swiftshader", "--use-angle=swiftshader"],
+        )
+        page = browser.new_page(viewport={"width": 1400, "height": 1100})
+        errors: list[str] = []
+        page.on("pageerror", lambda error: errors.append(str(error)))
+        page.route("**/*", only_local)
+        page.base = base  # type: ignore[attr-defined]
+        yield page
+        browser.close()
+    assert outside == [], f"the dashboard tried to reach outside the server: {outside}"
+    assert errors == [], f"errors in the page: {errors}"
+
+
+def shot(page: Any, name: str) -> None:
+    ARTIFACTS.mkdir(exist_ok=True)
+    page.screenshot(path=str(ARTIFACTS / f"{name}.png"), full_page=True)
+
+
+def individuals_total(server: httpx.Client, run_id: int) -> int:
+    return int(server.get(f"/runs/{run_id}/individuals", params={"limit": 1}).json()["total"])
+
+
+def test_a_finished_run_its_charts_and_the_replay(
+    page: Any, server: httpx.Client, runs: dict[str, int]
+) -> None:
+    run_id = runs["done"]
+    page.goto(f"{page.base}/#/runs/{run_id}")
+    page.wait_for_function(
+        "window.softevo.replay && window.softevo.replay.frames > 0", timeout=30000
+    )
+    curve = server.get(f"/runs/{run_id}/curve").json()["generations"]
+    assert page.evaluate("window.softevo.charts.curve.data[0].length") == len(curve) == 4
+    shown = page.evaluate("window.softevo.charts.curve.data[1]")  # best so far
+    assert shown == [row["best_so_far"] for row in curve]
+    assert page.evaluate("window.softevo.dots") == individuals_total(server, run_id) == 32
+    assert page.evaluate("window.softevo.charts.diversity.data[0].length") == len(curve)
+    # the replay plays: its frame advances and the WebGL canvas shows something else
+    assert page.evaluate("window.softevo.replay.renderer") == "webgl"
+    canvas = "document.querySelector('#replay-canvas canvas').toDataURL()"
+    first = (page.evaluate("window.softevo.replay.frame"), page.evaluate(canvas))
+    page.wait_for_timeout(1200)
+    second = (page.evaluate("window.softevo.replay.frame"), page.evaluate(canvas))
+    assert second[0] != first[0], "the replay's frame did not advance"
+    assert second[1] != first[1], "the canvas did not change while playing"
+    shot(page, "dashboard-run")
+    # pause stops it; the slider moves it
+    page.click("#replay-play")
+    paused = page.evaluate("window.softevo.replay.frame")
+    page.wait_for_timeout(400)
+    assert page.evaluate("window.softevo.replay.frame") == paused
+    # a click on a dot replays that individual
+    point = page.evaluate("""() => {
+        const u = window.softevo.charts.population;
+        u.over.scrollIntoView({block: "center"});
+        const r = u.over.getBoundingClientRect();
+        const i = u.data[1].findLastIndex(v => v !== null);
+        return [r.left + u.valToPos(u.data[0][i], 'x'), r.top + u.valToPos(u.data[1][i], 'y')];
+    }""")
+    page.mouse.click(*point)
+    page.wait_for_function("window.softevo.replay.label.startsWith('individual')", timeout=15000)
+    shot(page, "dashboard-replay")
+
+
+def test_a_running_run_updates_live(page: Any, server: httpx.Client, runs: dict[str, int]) -> None:
+    run_id = runs["running"]
+    page.goto(f"{page.base}/#/runs/{run_id}")
+    page.wait_for_function("window.softevo.charts.curve !== undefined", timeout=30000)
+    before = page.evaluate("window.softevo.charts.curve.data[0].length")
+    page.wait_for_function(
+        f"window.softevo.charts.curve.data[0].length >= {before + 2}", timeout=30000
+    )
+    shown = page.evaluate("window.softevo.charts.curve.data[0].length")
+    committed = server.get(f"/runs/{run_id}").json()["progress"]["generation"]
+    assert before + 2 <= shown <= committed
+    assert page.evaluate("window.softevo.dots") >= shown * LONG["population"]
+    shot(page, "dashboard-live")
+
+
+def test_a_run_started_from_the_page_appears(
+    page: Any, server: httpx.Client, runs: dict[str, int]
+) -> None:
+    page.goto(f"{page.base}/#/")
+    page.wait_for_selector(f"tr[data-run='{runs['done']}']")
+    shot(page, "dashboard-runs")
+    page.select_option("#start-form select[name=preset]", "quick")
+    page.fill("#start-form input[name=population]", "4")
+    page.fill("#start-form input[name=generations]", "2")
+    page.fill("#start-form input[name=seed]", "77")
+    page.click("#start-form button[type=submit]")
+    page.wait_for_function(
+        "document.getElementById('start-message').textContent.includes('queued')", timeout=15000
+    )
+    new_id = int(page.text_content("#start-message").split()[1])
+    page.wait_for_selector(f"tr[data-run='{new_id}']", timeout=15000)
+    run = server.get(f"/runs/{new_id}").json()
+    assert run["seed"] == 77 and run["config"]["population"] == 4
+    # a refused request shows the server's reason
+    page.fill("#start-form input[name=shape]", "99x99x99")
+    page.click("#start-form button[type=submit]")
+    page.wait_for_function(
+        "document.getElementById('start-message').textContent.includes('422')", timeout=15000
+    )
+
+
+def test_a_sweep(page: Any, server: httpx.Client) -> None:
+    body = {**SMALL, "shapes": [[2, 2, 2], [3, 2, 2]], "seeds": [1, 2]}
+    body.pop("seed")
+    sweep = server.post("/sweeps", json=body).json()
+    ids = [i for b in sweep["boxes"] for i in b["run_ids"]]
+    wait(
+        lambda: all(server.get(f"/runs/{i}").json()["status"] == "completed" for i in ids),
+        120,
+        "sweep done",
+    )
+    page.goto(f"{page.base}/#/sweeps/{sweep['id']}")
+    page.wait_for_function("Object.keys(window.softevo.charts).length === 3", timeout=30000)
+    means = page.evaluate("window.softevo.charts.boxes.data[1]")
+    api = server.get(f"/sweeps/{sweep['id']}").json()
+    assert means == [b["best_mean"] for b in api["boxes"]]
+    shot(page, "dashboard-sweep")
+
+
+def test_static_files_are_local_and_typed(server: httpx.Client) -> None:
+    html = server.get("/")
+    assert html.status_code == 200 and html.headers["content-type"].startswith("text/html")
+    assert "http://" not in html.text and "https://" not in html.text
+    for path, kind in (
+        ("/static/app.js", "javascript"),
+        ("/static/style.css", "text/css"),
+        ("/static/vendor/three/three.module.js", "javascript"),
+        ("/static/vendor/uplot/uPlot.iife.min.js", "javascript"),
+    ):
+        response = server.get(path)
+        assert response.status_code == 200 and kind in response.headers["content-type"], path
+    assert "/" not in server.get("/openapi.json").json()["paths"]
+
+
+def test_the_token_is_asked_for_and_kept(page: Any, tmp_path: Path) -> None:
+    """With SOFTEVO_API_TOKEN set, a start without it is refused and the token field is pointed
+    at; once typed, the token is kept in localStorage and the run starts."""
+    with serve(tmp_path, token="s3cret") as guarded:
+        base = str(guarded.base_url).rstrip("/")
+        page.goto(f"{base}/#/")
+        page.evaluate("localStorage.removeItem('softevo-token')")
+        page.reload()
+        page.wait_for_selector("#start-form")
+        page.fill("#start-form input[name=population]", "4")
+        page.fill("#start-form input[name=generations]", "1")
+        page.click("#start-form button[type=submit]")
+        page.wait_for_function(
+            "document.getElementById('start-message').textContent.startsWith('401')",
+            timeout=15000,
+        )
+        assert "wanted" in (page.get_attribute("#token", "class") or "")
+        page.fill("#token", "s3cret")
+        page.dispatch_event("#token", "change")
+        assert page.evaluate("localStorage.getItem('softevo-token')") == "s3cret"
+        page.click("#start-form button[type=submit]")
+        page.wait_for_function(
+            "document.getElementById('start-message').textContent.includes('queued')",
+            timeout=15000,
+        )
+        assert guarded.get("/runs").json()["total"] == 1
+        page.reload()  # the token survives a reload
+        page.wait_for_selector("#start-form")
+        assert page.input_value("#token") == "s3cret"

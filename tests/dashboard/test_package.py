@@ -1,0 +1,41 @@
+"""The dashboard's files ship in the package (pyproject package-data), so `pip install .`
+serves the same page offline as an editable checkout."""
+
+from __future__ import annotations
+
+import fnmatch
+import tomllib
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_every_static_file_is_package_data() -> None:
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    patterns = config["tool"]["setuptools"]["package-data"]["api.dashboard"]
+    folder = ROOT / "api" / "dashboard"
+    files = [
+        p.relative_to(folder).as_posix() for p in (folder / "static").rglob("*") if p.is_file()
+    ]
+    assert len(files) >= 10
+    # setuptools globs do not cross "/": a pattern must match the whole relative path
+    unshipped = [
+        f
+        for f in files
+        if not any(fnmatch.fnmatch(f, p) and f.count("/") == p.count("/") for p in patterns)
+    ]
+    assert unshipped == []
+
+
+def test_vendored_libraries_carry_their_licences() -> None:
+    vendor = ROOT / "api" / "dashboard" / "static" / "vendor"
+    for library in ("uplot", "three"):
+        assert (
+            "MIT" in (vendor / library / "LICENSE").read_text()[:200]
+            or "MIT" in (vendor / library / "LICENSE").read_text()
+        )
+    sums = (vendor / "SHA256SUMS").read_text().splitlines()
+    assert {line.split()[1] for line in sums} >= {
+        "./uplot/uPlot.iife.min.js",
+        "./three/three.module.js",
+    }
