@@ -3,7 +3,7 @@ its first job, so no job pays for compilation or a cold import.
 
 The default class is RQ's forking `Worker`: each job runs in a child forked from the warm parent
 (kernels already loaded), and the parent can kill a child that runs away, which no alarm signal
-inside a numba loop could. BENCHMARKS.md (`bench/worker.py`) compares it with the alternatives.
+inside a numba loop could. BENCHMARKS.md (`bench/rq_workers.py`) compares it with the alternatives.
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""API latency benchmark: `python bench/api.py [--skip-postgres] [--postgres URL] [--requests N]`.
+"""API latency benchmark: `python bench/api_latency.py [--skip-postgres] [--postgres URL]
+[--requests N]`.
 
 For each database (a SQLite file, then a fresh PostgreSQL database created on the server at
 --postgres and dropped afterwards), starts the service as `softevo serve` in a subprocess on a free
@@ -21,7 +22,6 @@ import argparse
 import contextlib
 import os
 import platform
-import socket
 import subprocess
 import sys
 import tempfile
@@ -31,13 +31,9 @@ from pathlib import Path
 
 import httpx
 import numpy as np
+from benchlib import cpu_model, free_port
 from sqlalchemy import create_engine, text
 from sqlalchemy.engine import make_url
-
-# `python bench/api.py` puts bench/ first on sys.path, where this file would shadow the `api`
-# package of the service: take it off before importing that.
-if Path(sys.path[0] or ".").resolve() == Path(__file__).resolve().parent:
-    sys.path.pop(0)
 
 from api.db import Database, normalise_url, scratch_postgres
 
@@ -52,22 +48,6 @@ RUN = {
     "population": POPULATION,
     "sim": {"duration": 0.6, "settle_time": 0.1},
 }
-
-
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
-
-
-def free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
 
 
 def postgres_unreachable(server_url: str) -> str | None:
