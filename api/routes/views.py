@@ -8,6 +8,7 @@ rate cap, a figure by the run's size (under SOFTEVO_MAX_EVALUATIONS individuals)
 from __future__ import annotations
 
 import io
+import threading
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Path, Query, Response
@@ -20,6 +21,9 @@ from core.config import RunConfig
 from core.genome import Genome
 
 router = APIRouter(prefix="/runs", tags=["runs"])
+
+#: pyplot keeps global state (its figure registry, rcParams): one figure at a time in this process
+_FIGURES = threading.Lock()
 
 Fps = Annotated[float, Query(ge=0.1, le=120, description="frames per simulated second")]
 
@@ -57,14 +61,16 @@ def get_figure(
     from core import figures
 
     run = storage.get_run(db, run_id)
+    items = storage.list_individuals(db, run, None, 0, 10**9)[0] if kind == "population" else []
+    rows = storage.curve(db, run_id) if kind != "population" else []
     title = f"run {run_id} ({'x'.join(map(str, run.config['shape']))}, seed {run.seed})"
-    if kind == "population":
-        items, _ = storage.list_individuals(db, run, None, 0, 10**9)
-        figure = figures.population_figure(items, f"population: {title}")
-    elif kind == "curve":
-        figure = figures.curve_figure(storage.curve(db, run_id), f"learning curve: {title}")
-    else:
-        figure = figures.diversity_figure(storage.curve(db, run_id), f"diversity: {title}")
     buffer = io.BytesIO()
-    figures.write(figure, buffer)
+    with _FIGURES:
+        if kind == "population":
+            figure = figures.population_figure(items, f"population: {title}")
+        elif kind == "curve":
+            figure = figures.curve_figure(rows, f"learning curve: {title}")
+        else:
+            figure = figures.diversity_figure(rows, f"diversity: {title}")
+        figures.write(figure, buffer)
     return Response(buffer.getvalue(), media_type="image/png")

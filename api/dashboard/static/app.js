@@ -375,7 +375,10 @@ class Replay {
     camera.up.set(0, 0, 1);
     const grid = new THREE.GridHelper(60, 60, 0x8d98a3, 0xbfc7cf);
     grid.rotation.x = Math.PI / 2;
-    scene.add(grid, new THREE.AmbientLight(0xffffff, 1.2));
+    const ground = new THREE.Mesh(new THREE.PlaneGeometry(60, 60), new THREE.MeshBasicMaterial({ color: "#e3e8ed" }));
+    ground.position.z = -0.002;  // the ground (z = 0) under the grid lines
+    scene.background = new THREE.Color("#fbfcfd");
+    scene.add(ground, grid, new THREE.AmbientLight(0xffffff, 1.2));
     const geometry = new THREE.BufferGeometry();
     const positions = new Float32Array(springs.length * 6);
     const colours = new Float32Array(springs.length * 6);
@@ -401,7 +404,10 @@ class Replay {
     const first = data.frames[0];
     const centre = (frame) => frame.reduce((acc, p) => [acc[0] + p[0] / masses, acc[1] + p[1] / masses, acc[2] + p[2] / masses], [0, 0, 0]);
     const c0 = centre(first);
-    camera.position.set(c0[0] - 3, c0[1] - 6, c0[2] + 3.5);
+    // stand back in proportion to the robot's size, so a big box fits the view too
+    const extent = Math.max(...[0, 1, 2].map((k) => Math.max(...first.map((p) => p[k])) - Math.min(...first.map((p) => p[k]))));
+    const away = 1.2 * Math.max(1, extent / 2.5);
+    camera.position.set(c0[0] - 3 * away, c0[1] - 6 * away, c0[2] + 3.5 * away);
     controls?.target.set(...c0);
 
     const draw = (frame) => {
