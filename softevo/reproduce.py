@@ -8,7 +8,11 @@ in-process pool on every core) is started and stopped here. Phase 1, the breathi
 robot, not an evolution: it is simulated in this process with `core.physics`.
 
 Outputs in `--out`: results.csv and results.md (one row per experiment, variant and box: best
-speed over seeds, evaluations, wall time), the figures as PNG, and softevo.db with every genome.
+speed over seeds, best within the GA's simulation budget, evaluations, wall time), the figures as
+PNG, and softevo.db with every genome. `--resume` reuses the runs a previous invocation left in
+that database (or in the `--url` service) and submits only what is missing, so an interrupted
+reproduction goes on where it stopped, and the tables and figures can be redrawn from finished
+runs without simulating anything again (every run is deterministic in its config and seed).
 """
 
 from __future__ import annotations
@@ -16,6 +20,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import csv
+import json
 import math
 import os
 import socket
@@ -23,7 +28,7 @@ import statistics
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
@@ -32,6 +37,7 @@ from typing import Any
 import httpx
 
 from core import figures
+from core.config import resolve
 
 PAPER_NINE = [
     (3, 3, 6),
@@ -45,6 +51,8 @@ PAPER_NINE = [
     (9, 9, 2),
 ]
 FINAL = {"completed", "failed", "cancelled"}
+GA_ON_FOCUS = ("ablation", "paper settings")  # the GA at the paper's settings on the focus box
+REFERENCES = {"paper settings", "GA (paper-voxel)"}  # the GA rows others are compared with
 
 
 @dataclass(frozen=True)
@@ -59,6 +67,12 @@ class Plan:
     encoding_boxes: list[tuple[int, int, int]]
     ablation: dict[str, dict[str, Any]]
     climbers: int = 5  # hill climber population: the best and 4 mutants per generation
+    # more seeds on the focus box (GA, baselines, ablation): its comparisons are the noisiest
+    extra_focus_seeds: list[int] = field(default_factory=list)
+
+    @property
+    def focus_seeds(self) -> list[int]:
+        return self.seeds + [s for s in self.extra_focus_seeds if s not in self.seeds]
 
 
 FULL = Plan(
@@ -73,6 +87,7 @@ FULL = Plan(
         "mutation 0.5": {"mutation_probability": 0.5},
         "no immigrants": {"immigrants": 0.0},
     },
+    extra_focus_seeds=[4, 5],
 )
 QUICK = Plan(
     boxes=[(2, 2, 2), (3, 2, 2)],
@@ -93,6 +108,7 @@ QUICK = Plan(
     encoding_boxes=[(2, 2, 2)],
     ablation={"mutation 0.5": {"mutation_probability": 0.5}},
     climbers=3,
+    extra_focus_seeds=[3],
 )
 
 
@@ -116,6 +132,12 @@ def add_parser(commands: Any) -> None:
     parser.add_argument(
         "--workers", type=int, help="pool processes of the private service (default: all cores)"
     )
+    parser.add_argument(
+        "--resume",
+        action="store_true",
+        help="reuse matching runs already in --out/softevo.db (or the --url service) instead of "
+        "starting afresh; submit only the missing ones",
+    )
     parser.set_defaults(handler=reproduce_command)
 
 
@@ -129,8 +151,11 @@ def _free_port() -> int:
 
 
 @contextlib.contextmanager
-def service(url: str | None, out: Path, workers: int | None) -> Iterator[httpx.Client]:
-    """A client of `url`, or of a private `softevo serve` on a SQLite file in `out`."""
+def service(
+    url: str | None, out: Path, workers: int | None, resume: bool = False
+) -> Iterator[httpx.Client]:
+    """A client of `url`, or of a private `softevo serve` on a SQLite file in `out` (kept with
+    `resume`, else started afresh)."""
     token = os.environ.get("SOFTEVO_API_TOKEN")
     headers = {"Authorization": f"Bearer {token}"} if token else {}
     if url:
@@ -138,8 +163,9 @@ def service(url: str | None, out: Path, workers: int | None) -> Iterator[httpx.C
             yield client
         return
     database = out / "softevo.db"
-    for stale in out.glob("softevo.db*"):
-        stale.unlink()
+    if not resume:
+        for stale in out.glob("softevo.db*"):
+            stale.unlink()
     port = _free_port()
     env = {
         **os.environ,
@@ -225,6 +251,11 @@ class Group:
             "best_std": statistics.pstdev(best) if best else None,
             "best_min": min(best) if best else None,
             "best_max": max(best) if best else None,
+            "best_by_seed": " ".join(
+                f"{r['seed']}:{r['progress']['best_fitness']:.6g}"
+                for r in self.runs
+                if r["status"] == "completed" and r["progress"]["best_fitness"] is not None
+            ),
             "evaluations_mean": statistics.fmean(r["progress"]["evaluations"] for r in self.runs),
             "generations": self.runs[0]["progress"]["generations"] if self.runs else None,
             "population": self.runs[0]["config"]["population"] if self.runs else None,
@@ -239,26 +270,69 @@ def _wall(run: dict[str, Any]) -> float:
     return (datetime.fromisoformat(run["finished_at"]) - started).total_seconds()
 
 
+def _key(config: dict[str, Any]) -> str:
+    return json.dumps(config, sort_keys=True)
+
+
 class Experiments:
     """Submits every group, waits for them, and keeps what the API says of each run."""
 
-    def __init__(self, client: httpx.Client, plan: Plan) -> None:
+    def __init__(self, client: httpx.Client, plan: Plan, resume: bool = False) -> None:
         self.client = client
         self.plan = plan
         self.groups: list[Group] = []
         self.sweep_id: int | None = None
+        self.reused = 0
+        self._curves: dict[int, list[dict[str, Any]]] = {}
+        # with resume: runs not in a sweep, by resolved config, and sweeps, by request
+        self._runs: dict[str, list[int]] = {}
+        self._sweeps: list[dict[str, Any]] = []
+        if resume:
+            self._index_existing()
+
+    def _index_existing(self) -> None:
+        """What the service already holds that a resumed reproduction may reuse: every run
+        that has not failed or been cancelled (a queued or running one finishes by itself)."""
+        sweep_ids: set[int] = set()
+        offset = 0
+        while True:
+            page = _check(self.client.get("/runs", params={"offset": offset, "limit": 200}))
+            for run in page["items"]:
+                if run["status"] in {"failed", "cancelled"}:
+                    continue
+                if run.get("sweep_id") is not None:
+                    sweep_ids.add(run["sweep_id"])
+                else:
+                    self._runs.setdefault(_key(run["config"]), []).append(run["id"])
+            offset += len(page["items"])
+            if not page["items"] or offset >= page["total"]:
+                break
+        for ids in self._runs.values():
+            ids.sort()
+        self._sweeps = [_check(self.client.get(f"/sweeps/{i}")) for i in sorted(sweep_ids)]
 
     def submit_run(self, group: Group, request: dict[str, Any]) -> None:
+        reusable = self._runs.get(_key(resolve(request).model_dump(mode="json")))
+        if reusable:
+            group.run_ids.append(reusable.pop(0))
+            self.reused += 1
+            return
         run = _check(self.client.post("/runs", json=request))
         group.run_ids.append(run["id"])
 
+    def submit_sweep(self, request: dict[str, Any]) -> dict[str, Any]:
+        for sweep in self._sweeps:
+            statuses = [s for box in sweep["boxes"] for s in box["statuses"]]
+            if sweep["request"] == request and not {"failed", "cancelled"} & set(statuses):
+                self._sweeps.remove(sweep)
+                self.reused += len(statuses)
+                return sweep
+        return _check(self.client.post("/sweeps", json=request))
+
     def submit_all(self) -> None:
         plan = self.plan
-        sweep = _check(
-            self.client.post(
-                "/sweeps",
-                json={**plan.voxel, "shapes": [list(s) for s in plan.boxes], "seeds": plan.seeds},
-            )
+        sweep = self.submit_sweep(
+            {**plan.voxel, "shapes": [list(s) for s in plan.boxes], "seeds": plan.seeds}
         )
         self.sweep_id = sweep["id"]
         for box in sweep["boxes"]:
@@ -276,9 +350,20 @@ class Experiments:
                     spring, {**plan.voxel, "encoding": "spring", "shape": list(shape), "seed": seed}
                 )
             self.groups.append(spring)
+        focus = Group(*GA_ON_FOCUS, plan.focus)
+        swept = {
+            _check(self.client.get(f"/runs/{i}"))["seed"]: i
+            for i in self.group("boxes", "paper-voxel", plan.focus).run_ids
+        }
+        for seed in plan.focus_seeds:
+            if seed in swept:  # the sweep's run of this seed
+                focus.run_ids.append(swept[seed])
+            else:
+                self.submit_run(focus, {**plan.voxel, "shape": list(plan.focus), "seed": seed})
+        self.groups.append(focus)
         for name, overrides in plan.ablation.items():
             group = Group("ablation", name, plan.focus)
-            for seed in plan.seeds:
+            for seed in plan.focus_seeds:
                 self.submit_run(
                     group, {**plan.voxel, **overrides, "shape": list(plan.focus), "seed": seed}
                 )
@@ -288,9 +373,11 @@ class Experiments:
         """Random search and the hill climber, stopped at the GA's mean evaluation count."""
         plan = self.plan
         population = int(plan.voxel.get("population", 25))
+        reference = Group("baselines", "GA (paper-voxel)", plan.focus)
+        reference.run_ids = list(self.group(*GA_ON_FOCUS, plan.focus).run_ids)
         random_search = Group("baselines", "random search", plan.focus)
         climber = Group("baselines", "hill climber", plan.focus)
-        for seed in plan.seeds:
+        for seed in plan.focus_seeds:
             self.submit_run(
                 random_search,
                 {
@@ -315,7 +402,7 @@ class Experiments:
                     ),
                 },
             )
-        self.groups += [random_search, climber]
+        self.groups += [reference, random_search, climber]
 
     def wait(self) -> None:
         started = time.monotonic()
@@ -324,13 +411,13 @@ class Experiments:
         while True:
             for group in self.groups:
                 group.runs = [_check(self.client.get(f"/runs/{i}")) for i in group.run_ids]
-            focus = self.group("boxes", "paper-voxel", self.plan.focus)
+            focus = self.group(*GA_ON_FOCUS, self.plan.focus)
             if not baselines and all(r["status"] in FINAL for r in focus.runs):
                 budget = statistics.fmean(r["progress"]["evaluations"] for r in focus.runs)
                 self.submit_baselines(budget)
                 baselines = True
                 continue
-            runs = [r for g in self.groups for r in g.runs]
+            runs = list({r["id"]: r for g in self.groups for r in g.runs}.values())
             done = sum(r["status"] in FINAL for r in runs)
             line = f"{done}/{len(runs)} runs done"
             if line != last:
@@ -347,7 +434,71 @@ class Experiments:
         raise KeyError((experiment, variant, shape))
 
     def curve(self, run_id: int) -> list[dict[str, Any]]:
-        return _check(self.client.get(f"/runs/{run_id}/curve"))["generations"]
+        if run_id not in self._curves:
+            self._curves[run_id] = _check(self.client.get(f"/runs/{run_id}/curve"))["generations"]
+        return self._curves[run_id]
+
+    def budget(self, group: Group) -> float | None:
+        """The mean simulations of the GA at the paper's settings that `group` is compared
+        with: the focus box's GA (all focus seeds) for the baselines and the ablation, the
+        sweep's box for the encodings; None for the GA itself, the boxes and phase 2."""
+        if group.variant in REFERENCES:
+            return None
+        if group.experiment in {"ablation", "baselines"}:
+            runs = self.group(*GA_ON_FOCUS, group.shape).runs
+        elif group.experiment == "encodings":
+            runs = self.group("boxes", "paper-voxel", group.shape).runs
+        else:
+            return None
+        return statistics.fmean(r["progress"]["evaluations"] for r in runs) if runs else None
+
+    def best_within(self, run_id: int, budget: float) -> float | None:
+        """Best so far after the last generation that kept the run's simulations within
+        `budget`, so a variant that simulates more than the GA is compared on equal terms."""
+        best, total = None, 0
+        for row in self.curve(run_id):
+            total += row["evaluations"]
+            if total > budget:
+                break
+            best = row["best_so_far"]
+        return best
+
+    def rows(self) -> list[dict[str, Any]]:
+        """The table: one row per group, and for the groups that are compared with the GA
+        (baselines, encodings, ablation) their best within the GA's budget on the same box."""
+        rows = []
+        for group in self.groups:
+            row = {**group.row(), "budget": None, "budget_best_mean": None, "budget_best_std": None}
+            budget = self.budget(group)
+            if budget is not None:
+                best = [self.best_within(r["id"], budget) for r in group.runs]
+                best = [b for b in best if b is not None]
+                row["budget"] = budget
+                if best:
+                    row["budget_best_mean"] = statistics.fmean(best)
+                    row["budget_best_std"] = statistics.pstdev(best)
+            rows.append(row)
+        return rows
+
+    def busy(self) -> float:
+        """Wall seconds during which at least one run was going (the union of the runs' start
+        to finish intervals, from the API's timestamps): a resumed reproduction's idle gaps
+        between invocations do not count."""
+        spans = sorted(
+            (datetime.fromisoformat(r["started_at"]), datetime.fromisoformat(r["finished_at"]))
+            for g in self.groups
+            for r in g.runs
+            if r.get("started_at") and r.get("finished_at")
+        )
+        total, end = 0.0, None
+        for start, finish in spans:
+            if end is None or start > end:
+                total += (finish - start).total_seconds()
+                end = finish
+            elif finish > end:
+                total += (finish - end).total_seconds()
+                end = finish
+        return total
 
     def individuals(self, run_id: int) -> list[dict[str, Any]]:
         items: list[dict[str, Any]] = []
@@ -360,6 +511,27 @@ class Experiments:
             items += page["items"]
             if not page["items"] or len(items) >= page["total"]:
                 return items
+
+
+def _pyplot() -> Any:
+    """matplotlib on the Agg backend (no screen), in the style of `core.figures`."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    plt.rcParams.update(
+        {
+            "figure.dpi": 110,
+            "savefig.dpi": 150,
+            "font.size": 9,
+            "axes.grid": True,
+            "grid.alpha": 0.3,
+            "axes.spines.top": False,
+            "axes.spines.right": False,
+        }
+    )
+    return plt
 
 
 # -- phase 1 ---------------------------------------------------------------------------------------
@@ -377,7 +549,7 @@ def breathing_cube(out: Path, quick: bool) -> dict[str, Any]:
     assert trajectory is not None
     heights = trajectory.frames[:, :, 2].mean(axis=1)
     xs = trajectory.frames[:, :, 0].mean(axis=1)
-    plt = figures._pyplot()
+    plt = _pyplot()
     figure, axes = plt.subplots(figsize=(5.5, 3.0))
     axes.plot(trajectory.times, heights, label="centre of mass height (m)")
     axes.plot(trajectory.times, xs - xs[0], label="centre of mass x shift (m)")
@@ -395,6 +567,75 @@ def breathing_cube(out: Path, quick: bool) -> dict[str, Any]:
     }
 
 
+# -- the champions, simulated for longer ----------------------------------------------------------
+
+LONGER = (1, 3, 6)  # multiples of the run's simulated time
+
+
+def champions(experiments: Experiments, out: Path) -> list[dict[str, Any]]:
+    """The fastest robot of each box (`GET /runs/{id}/best`, saved as best_<box>.json),
+    simulated in this process for 1x (the fitness the run stored, as a check), 3x and 6x the
+    run's time: a fitness clock of a few actuation periods can reward a transient lunge, and
+    this shows which boxes' robots keep their speed."""
+    from core.physics import simulate
+    from core.robot_file import parse_robot, with_sim
+
+    rows = []
+    for shape in experiments.plan.boxes:
+        group = experiments.group("boxes", "paper-voxel", shape)
+        done = [r for r in group.runs if r["progress"]["best_fitness"] is not None]
+        if not done:
+            continue
+        run = max(done, key=lambda r: r["progress"]["best_fitness"])
+        data = _check(experiments.client.get(f"/runs/{run['id']}/best"))
+        box = "x".join(map(str, shape))
+        (out / f"best_{box}.json").write_text(json.dumps(data, indent=1) + "\n")
+        robot = parse_robot(data)
+        row: dict[str, Any] = {
+            "shape": box,
+            "run": run["id"],
+            "seed": run["seed"],
+            "stored_best": run["progress"]["best_fitness"],
+            "voxels": sum(label != "empty" for label in data["voxels"]),
+        }
+        for factor in LONGER:
+            duration = robot.sim.duration * factor
+            result, _ = simulate(with_sim(robot, duration=duration))
+            row[f"speed_{factor}x"] = result.speed
+            row[f"duration_{factor}x"] = duration
+        rows.append(row)
+    with (out / "champions.csv").open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=list(rows[0]) if rows else ["shape"])
+        writer.writeheader()
+        writer.writerows(rows)
+    return rows
+
+
+def champions_table(rows: list[dict[str, Any]]) -> list[str]:
+    if not rows:
+        return []
+    durations = [f"{rows[0][f'duration_{f}x']:g} s" for f in LONGER]
+    return [
+        "## champions, simulated for longer",
+        "",
+        "The fastest robot of each box (best_<box>.json), simulated again in process for the "
+        "run's own time (the first column must equal the stored best) and longer.",
+        "",
+        "| box | run | seed | voxels | stored best (m/s) | "
+        + " | ".join(f"speed over {d} (m/s)" for d in durations)
+        + " |",
+        "| --- | ---: | ---: | ---: | ---: |" + " ---: |" * len(LONGER),
+        *(
+            f"| {r['shape']} | {r['run']} | {r['seed']} | {r['voxels']} | "
+            f"{_fmt(r['stored_best'])} | "
+            + " | ".join(_fmt(r[f"speed_{f}x"]) for f in LONGER)
+            + " |"
+            for r in rows
+        ),
+        "",
+    ]
+
+
 # -- outputs ---------------------------------------------------------------------------------------
 
 COLUMNS = [
@@ -407,10 +648,14 @@ COLUMNS = [
     "best_std",
     "best_min",
     "best_max",
+    "best_by_seed",
     "evaluations_mean",
     "population",
     "generations",
     "wall_seconds_mean",
+    "budget",
+    "budget_best_mean",
+    "budget_best_std",
 ]
 
 
@@ -422,33 +667,47 @@ def _fmt(value: Any, digits: int = 4) -> str:
     return str(value)
 
 
-def write_tables(rows: list[dict[str, Any]], out: Path, notes: list[str]) -> None:
+def write_tables(
+    rows: list[dict[str, Any]], out: Path, notes: list[str], appendix: Sequence[str] = ()
+) -> None:
     with (out / "results.csv").open("w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=COLUMNS)
         writer.writeheader()
         writer.writerows(rows)
     lines = ["# softevo reproduce: results", "", *notes, ""]
     for experiment in dict.fromkeys(r["experiment"] for r in rows):
+        group = [r for r in rows if r["experiment"] == experiment]
+        budgeted = any(r["budget"] is not None for r in group)
+        extra = " best within the GA's simulations: mean (std) | GA's simulations |"
         lines += [
             f"## {experiment}",
             "",
             "| variant | box | seeds | best speed mean (m/s) | spread (std) | min | max "
-            "| evaluations (mean) | wall per run (s) |",
-            "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |",
+            "| simulations (mean) | wall per run (s) |" + (extra if budgeted else ""),
+            "| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |"
+            + (" ---: | ---: |" if budgeted else ""),
         ]
-        for r in rows:
-            if r["experiment"] == experiment:
-                lines.append(
-                    f"| {r['variant']} | {r['shape']} | {r['seeds']} | {_fmt(r['best_mean'])} "
-                    f"| {_fmt(r['best_std'])} | {_fmt(r['best_min'])} | {_fmt(r['best_max'])} "
-                    f"| {_fmt(r['evaluations_mean'], 0)} | {_fmt(r['wall_seconds_mean'], 1)} |"
+        for r in group:
+            line = (
+                f"| {r['variant']} | {r['shape']} | {r['seeds']} | {_fmt(r['best_mean'])} "
+                f"| {_fmt(r['best_std'])} | {_fmt(r['best_min'])} | {_fmt(r['best_max'])} "
+                f"| {_fmt(r['evaluations_mean'], 0)} | {_fmt(r['wall_seconds_mean'], 1)} |"
+            )
+            if budgeted:
+                within = (
+                    f"{_fmt(r['budget_best_mean'])} ({_fmt(r['budget_best_std'])})"
+                    if r["budget_best_mean"] is not None
+                    else "-"
                 )
+                line += f" {within} | {_fmt(r['budget'], 0)} |"
+            lines.append(line)
         lines.append("")
+    lines += appendix
     (out / "results.md").write_text("\n".join(lines))
 
 
 def _bars(groups: list[Group], labels: list[str], title: str, path: Path) -> None:
-    plt = figures._pyplot()
+    plt = _pyplot()
     figure, axes = plt.subplots(figsize=(6.5, 3.4))
     for x, group in enumerate(groups):
         best = [r["progress"]["best_fitness"] or 0.0 for r in group.runs]
@@ -497,10 +756,7 @@ def write_figures(experiments: Experiments, out: Path) -> dict[str, Any]:
         out / "phase2_cube.png",
         by="generation",
     )
-    focus = experiments.group("boxes", "paper-voxel", plan.focus)
-    baselines = [("GA (paper-voxel)", focus)] + [
-        (g.variant, g) for g in experiments.groups if g.experiment == "baselines"
-    ]
+    baselines = [(g.variant, g) for g in experiments.groups if g.experiment == "baselines"]
     _curves(
         experiments,
         baselines,
@@ -523,12 +779,19 @@ def write_figures(experiments: Experiments, out: Path) -> dict[str, Any]:
         "voxel against spring encoding",
         out / "encodings.png",
     )
-    ablation = [focus] + [g for g in experiments.groups if g.experiment == "ablation"]
+    ablation = [g for g in experiments.groups if g.experiment == "ablation"]
     _bars(
         ablation,
-        ["paper settings"] + [g.variant for g in ablation[1:]],
+        [g.variant for g in ablation],
         f"ablation, {'x'.join(map(str, plan.focus))}",
         out / "ablation.png",
+    )
+    _curves(
+        experiments,
+        [(g.variant, g) for g in ablation],
+        f"ablation, {'x'.join(map(str, plan.focus))}: best so far",
+        out / "ablation_curves.png",
+        by="evaluations",
     )
     return {
         "figure4_run": best_run["id"],
@@ -541,7 +804,7 @@ def _curves(
     experiments: Experiments, groups: list[tuple[str, Group]], title: str, path: Path, by: str
 ) -> None:
     """Best so far of every run of each group, against generation or cumulative evaluations."""
-    plt = figures._pyplot()
+    plt = _pyplot()
     figure, axes = plt.subplots(figsize=(6.0, 3.4))
     colours = ["tab:blue", "tab:orange", "tab:green", "tab:red"]
     for k, (label, group) in enumerate(groups):
@@ -581,24 +844,53 @@ def reproduce_command(args: argparse.Namespace) -> int:
     except OSError as error:
         args.parser.error(f"--out {out}: cannot write there ({error.strerror})")
     started = time.monotonic()
-    print(f"softevo reproduce{' --quick' if args.quick else ''}: results in {out}/", flush=True)
+    flags = " --quick" if args.quick else ""
+    print(f"softevo reproduce{flags}: results in {out}/", flush=True)
     phase1 = breathing_cube(out, args.quick)
-    with service(args.url, out, args.workers) as client:
-        experiments = Experiments(client, plan)
-        experiments.submit_all()
-        experiments.wait()
-        figure4 = write_figures(experiments, out)
-        sweep = _check(client.get(f"/sweeps/{experiments.sweep_id}"))
+    try:
+        with service(args.url, out, args.workers, args.resume) as client:
+            experiments = Experiments(client, plan, resume=args.resume)
+            experiments.submit_all()
+            experiments.wait()
+            figure4 = write_figures(experiments, out)
+            sweep = _check(client.get(f"/sweeps/{experiments.sweep_id}"))
+            rows = experiments.rows()
+            longer = champions(experiments, out)
+    except httpx.HTTPError as error:
+        where = args.url or "the private service"
+        raise SystemExit(f"softevo reproduce: error: {where}: {error}") from None
     wall = time.monotonic() - started
-    rows = [group.row() for group in experiments.groups]
+    runs = list({r["id"]: r for g in experiments.groups for r in g.runs}.values())
+    walls = [w for w in (_wall(r) for r in runs) if math.isfinite(w)]
+    reused = (
+        f" ({experiments.reused} of them reused from an earlier invocation by --resume)"
+        if experiments.reused
+        else ""
+    )
     notes = [
-        f"Command: `softevo reproduce{' --quick' if args.quick else ''} --out {out}`; "
-        f"{len([r for g in experiments.groups for r in g.runs])} runs through the REST API "
-        f"(sweep {experiments.sweep_id} holds the boxes), {wall:.0f} s of wall time on "
-        f"{os.cpu_count()} cores.",
-        f"Phase 1 (breathing cube, simulated in process for {phase1['duration']:.0f} s): speed "
-        f"{_fmt(phase1['speed'], 5)} m/s, net distance {_fmt(phase1['distance'], 5)} m, final "
-        f"centre-of-mass height {phase1['final_height']:.4f} m, stable {phase1['stable']}.",
+        f"Command: `softevo reproduce{flags} --out {out}"
+        + (f" --url {args.url}" if args.url else "")
+        + f"`; {len(runs)} runs through the REST API{reused}, sweep {experiments.sweep_id} "
+        f"holds the boxes; this machine has {os.cpu_count()} cores.",
+        f"Wall time: {experiments.busy():.0f} s with at least one run going (the union of the "
+        f"runs' start-to-finish intervals, from the API); the runs' own wall times add up to "
+        f"{sum(walls):.0f} s"
+        + (
+            "."
+            if args.url
+            else ", because the private service ran two at a time (SOFTEVO_MAX_RUNNING=2) on "
+            "one pool of processes, so a run's wall time is about twice what it would be alone."
+        )
+        + f" This invocation took {wall:.0f} s.",
+        "Simulations: a run's simulations (its evaluations) are the genomes it simulated; the "
+        "rest of its population came from its fitness cache (survivors, repeats). The "
+        "baselines were given the paper-voxel GA's mean simulations on their box; 'best within "
+        "the GA's simulations' is each run's best so far at the last generation that stayed "
+        "within that many, so variants that simulate more are compared on equal terms.",
+        f"Phase 1 (breathing cube, simulated in process with core.physics for "
+        f"{phase1['duration']:.0f} s): speed {_fmt(phase1['speed'], 5)} m/s, net distance "
+        f"{_fmt(phase1['distance'], 5)} m, final centre-of-mass height "
+        f"{phase1['final_height']:.4f} m, stable {phase1['stable']}.",
         f"Figure 4(b)-(d): run {figure4['figure4_run']} (box "
         f"{'x'.join(map(str, figure4['figure4_box']))}, seed {figure4['figure4_seed']}).",
         "Sweep as the API reports it (best mean per box): "
@@ -607,6 +899,6 @@ def reproduce_command(args: argparse.Namespace) -> int:
         )
         + ".",
     ]
-    write_tables(rows, out, notes)
+    write_tables(rows, out, notes, champions_table(longer))
     print(f"done in {wall:.0f} s: {out / 'results.md'}")
     return 0

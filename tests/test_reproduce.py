@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import shutil
 import sqlite3
 import statistics
 import subprocess
@@ -15,18 +16,23 @@ import pytest
 FIGURES = [
     "fig4a_boxes.png", "fig4b_curve.png", "fig4c_population.png", "fig4d_diversity.png",
     "phase1_breathing_cube.png", "phase2_cube.png", "baselines.png", "encodings.png",
-    "ablation.png",
+    "ablation.png", "ablation_curves.png",
 ]  # fmt: skip
+
+
+def reproduce(out: Path, *flags: str) -> subprocess.CompletedProcess[str]:
+    done = subprocess.run(
+        [sys.executable, "-m", "softevo.cli", "reproduce", "--quick", "--out", str(out), *flags],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr
+    return done
 
 
 @pytest.fixture(scope="module")
 def results(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("reproduce")
-    done = subprocess.run(
-        [sys.executable, "-m", "softevo.cli", "reproduce", "--quick", "--out", str(out)],
-        capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
-    assert done.returncode == 0, done.stdout + done.stderr
+    reproduce(out)
     return out
 
 
@@ -42,8 +48,20 @@ def test_every_table_and_figure_is_written(results: Path) -> None:
     for name in FIGURES:
         data = (results / name).read_bytes()
         assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 5000, name
+    # each box's fastest robot, simulated again: the run's own time gives the stored best
+    with (results / "champions.csv").open() as handle:
+        champions = list(csv.DictReader(handle))
+    assert [row["shape"] for row in champions] == ["2x2x2", "3x2x2"]
+    boxes = {row["shape"]: row for row in rows(results) if row["experiment"] == "boxes"}
+    for row in champions:
+        assert float(row["speed_1x"]) == float(row["stored_best"])
+        assert float(row["stored_best"]) == float(boxes[row["shape"]]["best_max"])
+        robot = json.loads((results / f"best_{row['shape']}.json").read_text())
+        assert robot["format"] == "softevo.robot/1"
+        assert "x".join(map(str, robot["shape"])) == row["shape"]
     text = (results / "results.md").read_text()
     assert "## boxes" in text and "Phase 1" in text and "Figure 4(b)-(d): run" in text
+    assert "## champions, simulated for longer" in text
 
 
 @pytest.mark.slow
@@ -63,9 +81,42 @@ def test_the_table_is_what_the_service_stored(results: Path) -> None:
     for row in boxes:
         assert float(row["best_mean"]) == pytest.approx(statistics.fmean(swept[row["shape"]]))
         assert row["completed"] == "2"
-    # the baselines ran on the GA's evaluation budget (within a generation's worth)
+    # the focus box's GA: the sweep's seeds and one more; the same runs in both of its tables
     table = {(row["experiment"], row["variant"]): row for row in rows(results)}
-    budget = float(next(r for r in boxes if r["shape"] == "2x2x2")["evaluations_mean"])
+    ga = table["baselines", "GA (paper-voxel)"]
+    assert ga["seeds"] == table["ablation", "paper settings"]["seeds"] == "1 2 3"
+    assert ga["best_mean"] == table["ablation", "paper settings"]["best_mean"]
+    # the baselines ran on the GA's simulations (within a generation's worth)
+    budget = float(ga["evaluations_mean"])
     for variant in ("random search", "hill climber"):
+        assert table["baselines", variant]["seeds"] == "1 2 3"
         spent = float(table["baselines", variant]["evaluations_mean"])
         assert abs(spent - budget) <= 6, (variant, spent, budget)
+    # and every variant's best within the GA's simulations is at most its best
+    encodings_budget = float(next(r for r in boxes if r["shape"] == "2x2x2")["evaluations_mean"])
+    for row in rows(results):
+        if row["experiment"] in ("boxes", "phase 2") or "paper" in row["variant"]:
+            assert row["budget"] == "", row
+            continue
+        expected = encodings_budget if row["experiment"] == "encodings" else budget
+        assert float(row["budget"]) == pytest.approx(expected)
+        assert float(row["budget_best_mean"]) <= float(row["best_mean"]) + 1e-12
+
+
+@pytest.mark.slow
+def test_resume_reuses_every_finished_run(results: Path, tmp_path: Path) -> None:
+    """A second invocation with --resume simulates nothing new and writes the same table."""
+    copy = tmp_path / "again"
+    shutil.copytree(results, copy)
+    with sqlite3.connect(results / "softevo.db") as db:
+        total = db.execute("SELECT count(*) FROM runs").fetchone()[0]
+    done = reproduce(copy, "--resume")
+    assert (
+        f"runs through the REST API ({total} of them reused" in (copy / "results.md").read_text()
+    ), done.stdout
+    with sqlite3.connect(copy / "softevo.db") as db:
+        assert db.execute("SELECT count(*) FROM runs").fetchone()[0] == total
+    keep = ("experiment", "variant", "shape", "seeds", "best_mean", "evaluations_mean")
+    assert [{k: r[k] for k in keep} for r in rows(copy)] == [
+        {k: r[k] for k in keep} for r in rows(results)
+    ]
