@@ -1,8 +1,11 @@
-"""Shared test fixtures: paths of the repository and its examples."""
+"""Shared test fixtures (paths of the repository and its examples), and the fault tests' report:
+what each test marked `fault` printed (recovery times, what was killed and when) is repeated in
+a section at the end of the run, so CI's output shows the measured figures without `-s`."""
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -14,3 +17,23 @@ ROOT = Path(__file__).resolve().parent.parent
 @pytest.fixture
 def examples() -> Path:
     return ROOT / "examples"
+
+
+_FAULT_REPORTS: list[tuple[str, list[str]]] = []
+
+
+def pytest_runtest_logreport(report: pytest.TestReport) -> None:
+    if report.when == "call" and report.passed and "fault" in report.keywords:
+        lines = [line for line in report.capstdout.splitlines() if line.strip()]
+        if lines:
+            _FAULT_REPORTS.append((report.nodeid, lines))
+
+
+def pytest_terminal_summary(terminalreporter: Any) -> None:
+    if not _FAULT_REPORTS:
+        return
+    terminalreporter.section("fault tests: what was done and how long recovery took")
+    for nodeid, lines in _FAULT_REPORTS:
+        terminalreporter.write_line(nodeid)
+        for line in lines:
+            terminalreporter.write_line(f"    {line}")

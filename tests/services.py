@@ -10,6 +10,7 @@ import signal
 import socket
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from pathlib import Path
@@ -68,6 +69,56 @@ class RedisServer:
         if self.process is not None and self.process.poll() is None:
             self.process.send_signal(signal.SIGKILL)
             self.process.wait(10)
+
+
+class PostgresServer:
+    """A PostgreSQL server of our own (a fresh cluster on a free port, trust auth), which a test
+    may crash (`pg_ctl stop -m immediate`: no shutdown checkpoint, like a power cut) and start
+    again. The cluster belongs to the `postgres` user when the tests run as root."""
+
+    def __init__(self) -> None:
+        bins = sorted(Path("/usr/lib/postgresql").glob("*/bin/initdb"))
+        found = str(bins[-1]) if bins else shutil.which("initdb")  # Debian's, with its tools
+        if found is None:
+            require("initdb")  # fails under CI, skips elsewhere
+        self.bin = Path(str(found)).parent
+        self.port = free_port()
+        # a folder of its own, outside pytest's (which only root may enter)
+        self.home = Path(tempfile.mkdtemp(prefix="softevo-pg-"))
+        self.data = self.home / "data"
+        self.user: list[str] = []
+        if os.geteuid() == 0:  # initdb refuses root: run the server as postgres
+            self.user = ["runuser", "-u", "postgres", "--"]
+            shutil.chown(self.home, "postgres")
+        self._run("initdb", "-D", str(self.data), "-A", "trust", "-U", "postgres", "-E", "UTF8")
+        self.start()
+        self._run("createdb", "-h", "127.0.0.1", "-p", str(self.port), "-U", "postgres", "softevo")
+
+    @property
+    def url(self) -> str:
+        return f"postgresql://postgres@127.0.0.1:{self.port}/softevo"
+
+    def _run(self, tool: str, *args: str) -> None:
+        done = subprocess.run(
+            [*self.user, str(self.bin / tool), *args], capture_output=True, text=True, timeout=60
+        )
+        if done.returncode != 0:
+            raise RuntimeError(f"{tool} failed: {done.stdout}{done.stderr}")
+
+    def start(self) -> None:
+        options = f"-p {self.port} -k {self.home} -c listen_addresses=127.0.0.1 -c fsync=off"
+        log = str(self.home / "postgres.log")
+        self._run("pg_ctl", "-D", str(self.data), "-o", options, "-l", log, "-w", "start")
+
+    def crash(self) -> None:
+        """Stop at once, as a crash would: clients are cut off, recovery runs at the next start."""
+        self._run("pg_ctl", "-D", str(self.data), "-m", "immediate", "-w", "stop")
+
+    def stop(self) -> None:
+        """Stop for good and remove the cluster."""
+        with contextlib.suppress(RuntimeError, subprocess.TimeoutExpired):
+            self._run("pg_ctl", "-D", str(self.data), "-m", "fast", "-w", "stop")
+        shutil.rmtree(self.home, ignore_errors=True)
 
 
 class Workers:

@@ -156,6 +156,7 @@ class RQEvaluator:
     def _collect(self, files: list[dict[str, Any]], key: str) -> dict[str, Any]:
         """Wait for the first result of any attempt, enqueueing again what is lost."""
         attempt, job_id = 1, None
+        late: set[str] = set()  # attempts presumed lost with their worker
         while True:
             try:
                 if job_id is None:
@@ -164,6 +165,7 @@ class RQEvaluator:
                 payload = None if item is None else parse_result(item[1], len(files))
                 if payload is not None:
                     self._learn(payload, files)
+                    self._retire(key, attempt, late, payload.get("job"))
                     return payload
                 if item is not None:
                     log.warning("batch %s: ignored a malformed result %.80r", key, item[1])
@@ -177,10 +179,28 @@ class RQEvaluator:
                 log.warning("job %s vanished (Redis restarted?); enqueueing it again", job_id)
                 job_id = None
             elif verdict in ("failed", "late"):
+                if verdict == "late":
+                    late.add(job_id)
                 if attempt >= self.max_attempts:
+                    self._retire(key, attempt, late, None)
                     return {"error": f"{verdict} after {attempt} attempts"}
                 log.warning("job %s %s; enqueueing attempt %d", job_id, verdict, attempt + 1)
                 attempt, job_id = attempt + 1, None
+
+    def _retire(self, key: str, attempts: int, late: set[str], winner: Any) -> None:
+        """Once a batch is settled, take its other attempts off Redis: a queued one would only
+        waste a worker, and one presumed lost (its worker killed) would otherwise sit in RQ's
+        StartedJobRegistry until RQ's own clean-up, minutes later. A copy still running on a
+        live worker finishes all the same; its late result is never read."""
+        for n in range(1, attempts + 1):
+            job_id = f"softevo-{key}-a{n}"
+            if job_id == winner:
+                continue
+            with contextlib.suppress(NoSuchJobError, *REDIS_DOWN):
+                job = Job.fetch(job_id, connection=self.connection, serializer=SERIALIZER)
+                status = job.get_status(refresh=False)
+                if status == JobStatus.QUEUED or (status == JobStatus.STARTED and job_id in late):
+                    job.delete()
 
     def _check(self, job_id: str, files: list[dict[str, Any]]) -> str:
         """waiting | vanished | failed | late, for a job whose result has not come back."""
@@ -189,6 +209,10 @@ class RQEvaluator:
         except NoSuchJobError:
             return "vanished"
         status = job.get_status(refresh=False)
+        if status == JobStatus.FINISHED and not self.connection.llen(result_key(key_of(job_id))):
+            # The job pushes its result before RQ marks it finished, so a finished job with an
+            # empty result list lost its result (the list expired, or Redis lost it): run again.
+            return "vanished"
         if status in (JobStatus.FAILED, JobStatus.STOPPED, JobStatus.CANCELED):
             return "failed"
         if status == JobStatus.QUEUED:
@@ -215,6 +239,11 @@ class RQEvaluator:
         return "waiting"
 
 
+def key_of(job_id: str) -> str:
+    """The batch key of job id `softevo-{key}-a{attempt}`."""
+    return job_id.removeprefix("softevo-").rsplit("-a", 1)[0]
+
+
 def work_units(robot_file: dict[str, Any]) -> float:
     """A robot's simulation cost in arbitrary units: integration steps x occupied voxels (the
     springs grow with them), so one measured rate gives deadlines for robots of any size."""
@@ -234,16 +263,23 @@ def parse_result(raw: bytes | str, robots: int) -> dict[str, Any] | None:
     (a pickle, say) are never deserialised any other way, and a result of the wrong shape is
     not taken for fitness."""
     try:
-        payload = json.loads(raw)
+        payload = json.loads(raw, parse_constant=_refuse_constant)
     except (ValueError, UnicodeDecodeError):
         return None
-    if not isinstance(payload, dict):
+    if not isinstance(payload, dict) or not isinstance(payload.get("worker", ""), str):
         return None
     if "fitness" in payload:
-        fitness = payload["fitness"]
+        fitness, seconds = payload["fitness"], payload.get("seconds")
         if not isinstance(fitness, list) or len(fitness) != robots:
             return None
         if not all(v is None or type(v) in (int, float) for v in fitness):
             return None
+        if type(seconds) not in (int, float) or seconds < 0:
+            return None
         return payload
     return payload if isinstance(payload.get("error"), str) else None
+
+
+def _refuse_constant(name: str) -> Any:
+    """NaN and Infinity are not JSON: a failed robot's speed is null."""
+    raise ValueError(f"{name} in a result")

@@ -186,6 +186,7 @@ def _saved_fitness(engine: Engine, run_id: int, generation: int) -> list[tuple[A
 
 
 @pytest.mark.slow
+@pytest.mark.fault
 def test_sigkill_mid_generation_then_restart_resumes_with_the_same_curve(
     start_server: Callable[[], Server], engine: Engine
 ) -> None:
@@ -286,6 +287,7 @@ def test_sigkill_mid_generation_then_restart_resumes_with_the_same_curve(
 
 
 @pytest.mark.slow
+@pytest.mark.fault
 def test_sigkill_again_and_again_at_random_moments(
     start_server: Callable[[], Server], engine: Engine
 ) -> None:
@@ -351,6 +353,7 @@ IN_COMMIT = text(
 
 
 @pytest.mark.slow
+@pytest.mark.fault
 @pytest.mark.postgres
 def test_sigkill_inside_the_generation_commit_transaction(
     postgres_url: str, tmp_path: Path

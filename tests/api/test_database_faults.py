@@ -19,13 +19,14 @@ from sqlalchemy import create_engine, text
 from sqlalchemy.engine import make_url
 
 from api.app import create_app
+from api.db import Database
 from api.settings import Settings
 from core.config import resolve
 from core.evaluation import SerialEvaluator
 from core.evolution import CURVE_COLUMNS, Evolution
-from tests.services import TcpProxy
+from tests.services import PostgresServer, TcpProxy
 
-pytestmark = [pytest.mark.postgres, pytest.mark.slow]
+pytestmark = [pytest.mark.postgres, pytest.mark.slow, pytest.mark.fault]
 
 #: 3x3x3 robots for 30 s simulated: ~0.1 s each, so the run lasts several seconds in process.
 REQUEST: dict[str, Any] = {
@@ -99,10 +100,22 @@ def check_completed(client: TestClient, run: dict, undisturbed: list[dict[str, A
     ]
 
 
+def check_unavailable(client: TestClient, run_id: int) -> int:
+    """While the database is away: reads and writes alike answer 503 JSON, no trace."""
+    answers = [client.get(path) for path in (f"/runs/{run_id}", "/healthz", "/runs")]
+    answers.append(client.post("/runs", json=REQUEST))
+    answers.append(client.post(f"/runs/{run_id}/cancel"))
+    for response in answers:
+        assert response.status_code == 503, (response.request.url, response.text)
+        assert response.headers["content-type"] == "application/json"
+        assert "Traceback" not in response.text
+        body = response.json()
+        assert body.get("detail") or body.get("database", "").startswith("down"), body
+    return len(answers)
+
+
 @pytest.fixture
 def database(postgres_url: str) -> Iterator[str]:
-    from api.db import Database
-
     db = Database(postgres_url)
     db.upgrade()
     db.dispose()
@@ -173,12 +186,7 @@ def test_database_host_cut_off_then_back(database: str, undisturbed: list[dict[s
         down = time.monotonic()
         answers = 0
         while time.monotonic() - down < 3.0:
-            for path in (f"/runs/{run_id}", "/healthz", "/runs"):
-                response = client.get(path)
-                assert response.status_code == 503, (path, response.text)
-                assert response.headers["content-type"] == "application/json"
-                assert "Traceback" not in response.text
-                answers += 1
+            answers += check_unavailable(client, run_id)
             watcher.check()
             time.sleep(0.2)
         proxy.up()
@@ -195,4 +203,52 @@ def test_database_host_cut_off_then_back(database: str, undisturbed: list[dict[s
         )
         check_completed(client, run, undisturbed)
     proxy.down()
+    watcher.engine.dispose()
+
+
+@pytest.fixture
+def own_postgres() -> Iterator[PostgresServer]:
+    """A PostgreSQL server of the test's own, so it can be crashed and restarted for real."""
+    server = PostgresServer()
+    try:
+        Database(server.url).upgrade()
+        yield server
+    finally:
+        server.stop()
+
+
+def test_postgres_server_crashed_and_restarted(
+    own_postgres: PostgresServer, undisturbed: list[dict[str, Any]]
+) -> None:
+    """The server itself goes: `pg_ctl stop -m immediate` (every backend killed, no checkpoint)
+    in the middle of the run, three seconds down, then started again, crash recovery and all.
+    No cancel reaches the run while the server is away (the POST is answered 503)."""
+    url = own_postgres.url
+    with make_client(url) as client:
+        run_id = client.post("/runs", json=REQUEST).json()["id"]
+        watcher = Watcher(url, run_id)
+        deadline = time.monotonic() + 30
+        while client.get(f"/runs/{run_id}").json()["progress"]["generation"] < 1:
+            assert time.monotonic() < deadline, "no generation committed before the crash"
+            time.sleep(0.05)
+        own_postgres.crash()
+        down = time.monotonic()
+        answers = 0
+        while time.monotonic() - down < 3.0:
+            answers += check_unavailable(client, run_id)
+            time.sleep(0.2)
+        own_postgres.start()
+        up = time.monotonic()
+        while client.get("/healthz").status_code != 200:
+            assert time.monotonic() - up < 10, "the API did not recover by itself"
+            time.sleep(0.05)
+        answering = time.monotonic() - up
+        run = wait_done(client, run_id, timeout=90, watcher=watcher)
+        print(
+            f"\n[pg] PostgreSQL crashed (immediate stop) for {up - down:.2f} s ({answers} "
+            f"answers, all 503 JSON); the API answered again {answering:.2f} s after the restart, "
+            f"and the run completed {time.monotonic() - up:.2f} s after ({run['takeovers']} "
+            "takeovers)"
+        )
+        check_completed(client, run, undisturbed)
     watcher.engine.dispose()

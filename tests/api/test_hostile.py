@@ -8,7 +8,10 @@ a recursive parser, numbers too large for any type.
 
 from __future__ import annotations
 
+import threading
+import time
 from collections.abc import Callable, Iterator
+from typing import Any
 
 import pytest
 from fastapi.testclient import TestClient
@@ -17,6 +20,8 @@ from api import storage
 from api.db import Database
 from api.settings import Limits
 from core.config import resolve
+from core.evaluation import SerialEvaluator
+from core.evolution import CURVE_COLUMNS, Evolution
 
 SMALL = {"preset": "quick", "seed": 1, "population": 6, "generations": 3}
 JSON = {"content-type": "application/json"}
@@ -119,6 +124,76 @@ def test_a_full_queue_refuses_with_429_and_queues_nothing(
     assert response.headers["retry-after"] == "30"
     assert "SOFTEVO_MAX_QUEUED" in response.json()["detail"]
     assert run_count(client) == 0
+
+
+@pytest.mark.slow
+@pytest.mark.fault
+def test_a_queue_filled_past_its_bound_over_http_then_drained(
+    make_client: Callable[..., TestClient],
+) -> None:
+    """Two API processes (two apps, each with its coordinator) on one database, a bound of 2
+    queued runs, and 12 POSTs at once from two threads: the bound holds at every moment, every
+    refusal is a 429 that queues nothing, every accepted run completes with the curve it has in
+    process, and once the queue drains a new run is accepted again."""
+    limits = Limits(max_queued=2)
+    apps = [make_client(max_running=1, limits=limits) for _ in range(2)]
+    request = {"preset": "quick", "population": 6, "generations": 5, "sim": {"duration": 1.0}}
+    answers: list[tuple[int, Any]] = []
+    queued_seen: list[int] = []
+    lock = threading.Lock()
+
+    def post(client: TestClient, seeds: range) -> None:
+        for seed in seeds:
+            response = client.post("/runs", json={**request, "seed": seed})
+            with lock:
+                answers.append((seed, response))
+
+    threads = [
+        threading.Thread(target=post, args=(apps[0], range(0, 6))),
+        threading.Thread(target=post, args=(apps[1], range(6, 12))),
+    ]
+    started = time.monotonic()
+    for thread in threads:
+        thread.start()
+    while any(thread.is_alive() for thread in threads):
+        queued_seen.append(apps[0].get("/runs", params={"status": "queued"}).json()["total"])
+    for thread in threads:
+        thread.join()
+    accepted = {seed: r.json()["id"] for seed, r in answers if r.status_code == 201}
+    refused = [r for _, r in answers if r.status_code != 201]
+    codes = [r.status_code for _, r in answers]
+    assert len(answers) == 12 and len(accepted) >= 2 and refused, codes
+    for response in refused:
+        assert response.status_code == 429, response.text
+        assert response.headers["retry-after"] == "30"
+        assert "SOFTEVO_MAX_QUEUED" in response.json()["detail"]
+        no_trace(response.text)
+    assert max(queued_seen) <= 2, queued_seen
+    assert run_count(apps[0]) == len(accepted)  # a refusal queued nothing
+    # room again once the queue drains: the next POST is accepted
+    while (again := apps[0].post("/runs", json={**request, "seed": 99})).status_code == 429:
+        assert time.monotonic() - started < 60, "the queue never drained"
+        time.sleep(0.1)
+    assert again.status_code == 201, again.text
+    room = time.monotonic() - started
+    accepted[99] = again.json()["id"]
+    deadline = time.monotonic() + 120
+    for seed, run_id in accepted.items():
+        while (run := apps[0].get(f"/runs/{run_id}").json())["status"] in ("queued", "running"):
+            assert time.monotonic() < deadline, run
+            time.sleep(0.05)
+        assert run["status"] == "completed", run
+        evolution = Evolution.start(resolve({**request, "seed": seed}))
+        evolution.run(SerialEvaluator())
+        curve = apps[1].get(f"/runs/{run_id}/curve").json()["generations"]
+        columns = [{c: g[c] for c in CURVE_COLUMNS} for g in curve]
+        assert columns == [{c: g[c] for c in CURVE_COLUMNS} for g in evolution.curve()]
+    print(
+        f"12 POSTs at once against a bound of 2: {len(accepted) - 1} accepted, {len(refused)} "
+        f"refused with 429, at most {max(queued_seen)} queued ({len(queued_seen)} samples); "
+        f"room again {room:.2f} s after the burst began; all {len(accepted)} runs completed "
+        f"{time.monotonic() - started:.2f} s after it, each with its in-process curve"
+    )
 
 
 def test_the_queue_bound_is_counted_in_the_write(db: Database) -> None:

@@ -45,7 +45,7 @@ from tests.services import RedisServer, Workers
 from worker.evaluator import RQEvaluator
 from worker.queue import QUEUE, SERIALIZER, result_key
 
-pytestmark = [pytest.mark.redis, pytest.mark.slow]
+pytestmark = [pytest.mark.redis, pytest.mark.slow, pytest.mark.fault]
 
 #: 3x3x3 robots simulated for 40 s: a batch of two takes ~0.3 s on a worker, so generation 0
 #: (twelve new robots, six batches) lasts a second or two on two workers and is easy to catch
@@ -202,6 +202,15 @@ def check_completed(service: Service, run_id: int, run: dict[str, Any], ref: Und
     assert run["progress"]["saved"] == ref.saved
 
 
+def check_nothing_started(service: Service) -> float:
+    """RQ's StartedJobRegistry empty soon after the run: no attempt of a killed or paused
+    worker is left "started" (the evaluator retires them once their batch is settled)."""
+    registry = StartedJobRegistry(QUEUE, connection=service.redis, serializer=SERIALIZER)
+    return wait_until(
+        lambda: registry.get_job_ids(cleanup=False) == [], 10, "StartedJobRegistry empty"
+    )
+
+
 # -- catching a job in flight -----------------------------------------------------------------
 
 
@@ -330,6 +339,8 @@ def test_worker_sigkilled_mid_job_while_another_is_alive(
     for individual in service.batch_individuals(run_id, caught.job):
         assert individual["worker"] == survivor and individual["status"] != "pending"
     assert workers.processes[survivor].poll() is None
+    assert fetch(service.redis, caught.job.id) is None, "the lost attempt was not retired"
+    print(f"[a] StartedJobRegistry empty {check_nothing_started(service):.2f} s after the run")
 
 
 def test_work_horse_sigkilled_mid_job(
@@ -398,6 +409,7 @@ def test_only_worker_killed_then_a_new_one_started_later(
     assert retry.get_status(refresh=True) == JobStatus.FINISHED
     for individual in service.batch_individuals(run_id, caught.job):
         assert individual["worker"] == "b2"
+    print(f"[b] StartedJobRegistry empty {check_nothing_started(service):.2f} s after the run")
 
 
 def test_redis_killed_and_restarted_mid_generation(
@@ -450,11 +462,7 @@ def test_redis_killed_and_restarted_mid_generation(
     assert died == [], f"workers exited instead of reconnecting: {died}"
     for name in ("c1", "c2"):
         assert workers.processes[name].poll() is None
-    registry = StartedJobRegistry(QUEUE, connection=service.redis, serializer=SERIALIZER)
-    waited = wait_until(
-        lambda: registry.get_job_ids(cleanup=False) == [], 10, "StartedJobRegistry empty"
-    )
-    print(f"[c] StartedJobRegistry empty {waited:.2f} s after the run completed")
+    print(f"[c] StartedJobRegistry empty {check_nothing_started(service):.2f} s after the run")
 
 
 def test_a_worker_survives_redis_restarting_under_its_job(
@@ -524,13 +532,19 @@ def test_worker_paused_past_the_deadline_then_continued(
         f"{deadline:.1f} s); {other} returned the batch {recovery:.2f} s after the pause"
     )
     check_completed(service, run_id, run, undisturbed)
-    for individual in service.batch_individuals(run_id, caught.job):
+    stored = service.batch_individuals(run_id, caught.job)
+    for individual in stored:
         assert individual["worker"] == other
     # The paused worker finished its copy after all: the late duplicate lands on the batch's
-    # result list and stays there unread.
-    batch_key = caught.job.args[0]
+    # result list and stays there unread, with the very speeds the other worker returned.
+    batch_key, files = caught.job.args
     wait_until(lambda: service.redis.llen(result_key(batch_key)) == 1, 10, "late duplicate")
+    duplicate = json.loads(service.redis.lindex(result_key(batch_key), 0))
+    assert duplicate["job"] == caught.job.id and duplicate["worker"] == caught.worker
+    for individual in stored:
+        assert duplicate["fitness"][files.index(individual["robot"])] == individual["fitness"]
     assert workers.processes[caught.worker].poll() is None
+    print(f"[d] StartedJobRegistry empty {check_nothing_started(service):.2f} s after the run")
 
 
 def test_a_batch_whose_job_raises(redis_server: RedisServer, workers: Workers) -> None:
@@ -635,6 +649,10 @@ def test_results_are_plain_json_and_garbage_on_the_result_list_is_ignored(
             b'{"fitness": [1.0]}',
             b'{"fitness": ["fast", 1.0]}',
             b"[1, 2]",
+            b'{"fitness": [1.0, 2.0]}',  # no seconds
+            b'{"fitness": [1.0, 2.0], "seconds": "soon"}',
+            b'{"fitness": [Infinity, NaN], "seconds": 0.1}',  # not JSON, and not speeds
+            b'{"fitness": [1.0, 2.0], "seconds": 0.1, "worker": 7}',
         ):
             redis.rpush(result_key("garbage"), junk)
         outcome: list[Any] = []

@@ -204,15 +204,16 @@ async function runView(runId) {
   // the data the charts draw, grown generation by generation
   let curve = (await api(`/runs/${runId}/curve`)).generations;
   const individuals = [];
-  const loaded = new Set();
+  // committed generations only, in pages of 5000 in (generation, index) order: a long run opens
+  // in a few requests, not one per generation
   async function loadGenerations() {
-    for (const row of curve) {
-      if (loaded.has(row.generation)) continue;
-      const page = await api(`/runs/${runId}/individuals?generation=${row.generation}&limit=5000`);
-      individuals.push(...page.items);
-      loaded.add(row.generation);
+    const committed = curve.length ? curve[curve.length - 1].generation : -1;
+    while (individuals.length < (committed + 1) * population) {
+      const page = await api(`/runs/${runId}/individuals?offset=${individuals.length}&limit=5000`);
+      const items = page.items.filter((item) => item.generation <= committed);
+      individuals.push(...items);
+      if (items.length < page.items.length || page.items.length === 0) break;
     }
-    individuals.sort((a, b) => a.id - b.id);
   }
   await loadGenerations();
 
@@ -229,9 +230,11 @@ async function runView(runId) {
     for (const item of individuals) {
       x.push(item.generation + (item.index / population - 0.5) * 0.7);
       ok.push(item.fitness === null ? null : item.fitness);
-      failed.push(item.status === "failed" ? 0 : null);
+      // failed: no speed, whether simulated in this generation or reused from the cache
+      failed.push(item.fitness === null ? 0 : null);
     }
-    softevo.dots = individuals.filter((i) => i.fitness !== null || i.status === "failed").length;
+    softevo.dots = individuals.length;
+    softevo.failedDots = individuals.filter((i) => i.fitness === null).length;
     return [x, ok, failed];
   };
   const dotPlot = chart("population", "Population: every individual (click one to replay it)", {
@@ -256,7 +259,7 @@ async function runView(runId) {
     if (!best) return;
     replay.best = null;  // a picked individual stays on screen while the run goes on
     replay.load(`/runs/${runId}/individuals/${best.id}/replay`,
-      `individual ${best.id} (generation ${best.generation}, ${best.operator}, ${fmt(best.fitness)} m/s)`)
+      () => `individual ${best.id} (generation ${best.generation}, ${best.operator}, ${best.fitness === null ? "failed" : `${fmt(best.fitness)} m/s`})`)
       .catch((error) => replayPanel.append(h("p", { class: "error" }, error.message)));
   }, true);
 
@@ -269,9 +272,10 @@ async function runView(runId) {
   const replay = new Replay(replayPanel);
   onLeave(() => replay.dispose());
   const showBest = async () => {
-    replay.best = run.progress.best_generation;
     const label = ["completed", "failed", "cancelled"].includes(run.status) ? "the fastest robot" : "the fastest robot so far";
-    await replay.load(`/runs/${runId}/best/replay`, `${label} (generation ${run.progress.best_generation})`);
+    // named from the replay itself: a better robot may have been committed since `run` was read
+    const data = await replay.load(`/runs/${runId}/best/replay`, (d) => `${label} (generation ${d.generation})`);
+    replay.best = data.generation;
   };
   if (run.progress.best_fitness !== null) {
     await showBest();
@@ -333,7 +337,8 @@ class Replay {
     const data = await api(`${url}?fps=30`);
     this.data = data;
     this.loaded = true;
-    this.build(label);
+    this.build(label(data));
+    return data;
   }
 
   build(label) {
