@@ -62,7 +62,7 @@ class SimResult:
     distance: float  # net horizontal displacement of the centre of mass (m)
     speed: float  # distance / measured time (m/s)
     wall_seconds: float
-    stable: bool  # every position finite at the end
+    stable: bool  # every position finite at the end, no spring blown past MAX_STRETCH
     final_positions: np.ndarray  # [M, 3] (m)
 
     def to_json(self) -> dict:
@@ -98,6 +98,21 @@ def _scalars(mech: Mechanics) -> tuple:
     )
 
 
+#: A spring longer than this many times its longest rest length at the end means the integration
+#: blew up (a time step past the stability limit), even if every position is still finite.
+MAX_STRETCH = 5.0
+
+
+def _blown_up(mech: Mechanics, end: np.ndarray) -> bool:
+    """Finite but absurd: some spring stretched past MAX_STRETCH x its longest rest length. No
+    crawling robot comes near it (springs stay within tens of percent); a robot whose explicit
+    integration diverged does, and would otherwise report a huge, meaningless speed."""
+    a, b = mech.lattice.springs[:, 0], mech.lattice.springs[:, 1]
+    length = np.sqrt(((end[a] - end[b]) ** 2).sum(axis=1))
+    longest = mech.rest_length + np.hypot(mech.amp_sin, mech.amp_cos)
+    return bool((length > MAX_STRETCH * longest).any())
+
+
 def _result(mech: Mechanics, start: np.ndarray, end: np.ndarray, wall: float) -> SimResult:
     """Build a result from positions [M, 3] at settle time and at the end.
 
@@ -107,7 +122,7 @@ def _result(mech: Mechanics, start: np.ndarray, end: np.ndarray, wall: float) ->
     start, end = np.ascontiguousarray(start), np.ascontiguousarray(end)
     com_start = start.mean(axis=0)
     com_end = end.mean(axis=0)
-    stable = bool(np.isfinite(end).all())
+    stable = bool(np.isfinite(end).all()) and not _blown_up(mech, end)
     distance = float(np.hypot(*(com_end[:2] - com_start[:2]))) if stable else math.nan
     return SimResult(
         masses=mech.n_masses,

@@ -87,6 +87,37 @@ def test_run_lifecycle_and_results(client: TestClient) -> None:
     assert client.get("/runs/999/figures/curve.png").status_code == 404
 
 
+def test_replays_are_bounded_and_remembered(
+    client: TestClient, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A replay is simulated on a GET, so its frames are capped (fps lowered to fit, and said)
+    and a repeated request is served from memory, not simulated again."""
+    import api.replay
+
+    run_id = start(client)
+    wait_for(client, run_id, ("completed",))
+    simulated: list[int] = []
+    real = api.replay._simulate
+    monkeypatch.setattr(
+        api.replay,
+        "_simulate",
+        lambda *a: simulated.append(a[2]) or real(*a),  # type: ignore[func-returns-value]
+    )
+    monkeypatch.setattr(api.replay, "_cache", type(api.replay._cache)())
+    monkeypatch.setattr(api.replay, "MAX_POSITIONS", 2000)
+    capped = client.get(f"/runs/{run_id}/best/replay", params={"fps": 120}).json()
+    masses = len(capped["frames"][0])
+    assert len(capped["frames"]) * masses <= 2000 + masses
+    assert capped["fps"] < 120
+    assert capped["times"][1] == pytest.approx(1 / capped["fps"])
+    again = client.get(f"/runs/{run_id}/best/replay", params={"fps": 120}).json()
+    assert again == capped and len(simulated) == 1
+    monkeypatch.setattr(api.replay, "MAX_POSITIONS", 10**9)
+    full = client.get(f"/runs/{run_id}/best/replay", params={"fps": 120}).json()
+    assert full["fps"] == pytest.approx(120, rel=0.05) and len(simulated) == 2
+    assert full["speed"] == capped["speed"]  # the same simulation, only recorded more often
+
+
 def test_a_run_through_the_api_has_the_curve_of_softevo_run(
     client: TestClient, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -435,3 +435,33 @@ def test_batch_refuses_bad_thread_or_lane_counts() -> None:
         simulate_batch([], threads=0)
     with pytest.raises(ValueError, match="lanes"):
         simulate_batch([], lanes=0)
+
+
+def test_a_robot_whose_integration_diverged_is_unstable_not_fast() -> None:
+    """Past the time step's stability limit (dt = 3 ms against a 10 kN/m ground) robots blow up:
+    some to NaN, some to huge but finite positions, which once read as speeds of 1e70 m/s and
+    won the run. Every such robot is unstable with a NaN speed; a robot at the paper's dt is
+    stable, its springs nowhere near the stretch limit."""
+    from core.config import resolve
+    from core.evolution import Evolution
+    from core.physics.simulate import MAX_STRETCH
+
+    request = {"preset": "quick", "seed": 4, "population": 16, "generations": 1}
+    for dt, diverges in ((0.003, True), (0.0005, False)):
+        config = resolve({**request, "sim": {"duration": 1.5, "settle_time": 0.3, "dt": dt}})
+        evolution = Evolution.start(config)
+        robots = [evolution.robot(item) for item in evolution.algorithm.ask()]
+        results = simulate_batch(robots)
+        for result in results:
+            assert result.stable == np.isfinite(result.speed)
+            assert not result.stable or abs(result.speed) < 5.0, result.speed  # damping caps ~0.5
+        unstable = [r for r in results if not r.stable]
+        assert bool(unstable) == diverges
+        if diverges:  # some diverged robots are finite: the stretch test is what catches them
+            assert any(np.isfinite(r.final_positions).all() for r in unstable)
+    healthy = simulate(robots[0])[0]
+    ends = healthy.final_positions
+    mech = build_mechanics(robots[0])
+    a, b = mech.lattice.springs.T
+    stretch = np.linalg.norm(ends[a] - ends[b], axis=1) / mech.rest_length
+    assert stretch.max() < MAX_STRETCH / 2

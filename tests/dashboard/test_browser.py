@@ -23,6 +23,9 @@ SMALL = {
     "generations": 4,
     "sim": {"duration": 1.5, "settle_time": 0.3},
 }
+#: dt = 3 ms is past the stability limit of the ground contact for most robots: failed ones
+#: (no speed) in every generation, some simulated there and some reused from the cache
+FAILING = {**SMALL, "seed": 4, "generations": 3, "sim": {**SMALL["sim"], "dt": 0.003}}
 LONG = {
     "preset": "quick",
     "seed": 3,
@@ -49,16 +52,22 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[httpx.Client]:
 
 @pytest.fixture(scope="module")
 def runs(server: httpx.Client) -> Iterator[dict[str, int]]:
-    """A finished run and a running one (cancelled at the end)."""
+    """A finished run, one with failed robots, and a running one (cancelled at the end)."""
     done = server.post("/runs", json=SMALL).json()["id"]
-    wait(lambda: server.get(f"/runs/{done}").json()["status"] == "completed", 60, "run done")
+    failing = server.post("/runs", json=FAILING).json()["id"]
+    runs = (done, failing)
+    wait(
+        lambda: all(server.get(f"/runs/{i}").json()["status"] == "completed" for i in runs),
+        60,
+        "runs done",
+    )
     running = server.post("/runs", json=LONG).json()["id"]
     wait(
         lambda: server.get(f"/runs/{running}").json()["progress"]["generation"] >= 1,
         60,
         "running run has a generation",
     )
-    yield {"done": done, "running": running}
+    yield {"done": done, "failing": failing, "running": running}
     server.post(f"/runs/{running}/cancel")
 
 
@@ -126,11 +135,25 @@ def test_a_finished_run_its_charts_and_the_replay(
     assert second[0] != first[0], "the replay's frame did not advance"
     assert second[1] != first[1], "the canvas did not change while playing"
     shot(page, "dashboard-run")
-    # pause stops it; the slider moves it
+    # pause stops it; the slider moves it; the speed control sets the pace
     page.click("#replay-play")
     paused = page.evaluate("window.softevo.replay.frame")
     page.wait_for_timeout(400)
     assert page.evaluate("window.softevo.replay.frame") == paused
+    target = (paused + page.evaluate("window.softevo.replay.frames") // 2) % page.evaluate(
+        "window.softevo.replay.frames"
+    )
+    page.eval_on_selector(
+        "#replay-slider",
+        f"(s) => {{ s.value = {target}; s.dispatchEvent(new Event('input')); }}",
+    )
+    page.wait_for_function(f"window.softevo.replay.frame === {target}", timeout=5000)
+    replayed = server.get(f"/runs/{run_id}/best/replay", params={"fps": 30}).json()
+    assert page.text_content("#replay-clock") == f"{replayed['times'][target]:.2f} s"
+    page.select_option("#replay-speed", "4")
+    assert page.evaluate("window.softevo.replay.speed") == 4
+    page.click("#replay-play")
+    page.wait_for_function(f"window.softevo.replay.frame !== {target}", timeout=5000)
     # a click on a dot replays that individual
     point = page.evaluate("""() => {
         const u = window.softevo.charts.population;
@@ -142,6 +165,26 @@ def test_a_finished_run_its_charts_and_the_replay(
     page.mouse.click(*point)
     page.wait_for_function("window.softevo.replay.label.startsWith('individual')", timeout=15000)
     shot(page, "dashboard-replay")
+
+
+def test_failed_robots_are_marked_whether_simulated_or_reused(
+    page: Any, server: httpx.Client, runs: dict[str, int]
+) -> None:
+    run_id = runs["failing"]
+    items = server.get(f"/runs/{run_id}/individuals", params={"limit": 5000}).json()["items"]
+    failed = [i for i in items if i["fitness"] is None]
+    assert {"failed", "cached"} <= {i["status"] for i in failed}, "the run has no reused failure"
+    page.goto(f"{page.base}/#/runs/{run_id}")
+    page.wait_for_function(
+        f"document.querySelector('h2').textContent.startsWith('Run #{run_id}') && "
+        "window.softevo.replay && window.softevo.replay.label.startsWith('the fastest')",
+        timeout=30000,
+    )
+    assert page.evaluate("window.softevo.dots") == len(items)
+    assert page.evaluate("window.softevo.failedDots") == len(failed)
+    marks = page.evaluate("window.softevo.charts.population.data[2].filter(v => v === 0).length")
+    assert marks == len(failed)
+    shot(page, "dashboard-failed")
 
 
 def test_a_running_run_updates_live(page: Any, server: httpx.Client, runs: dict[str, int]) -> None:
@@ -157,6 +200,18 @@ def test_a_running_run_updates_live(page: Any, server: httpx.Client, runs: dict[
     assert before + 2 <= shown <= committed
     assert page.evaluate("window.softevo.dots") >= shown * LONG["population"]
     shot(page, "dashboard-live")
+    # every committed generation is drawn once the page catches up, one point each
+    page.wait_for_function(
+        f"window.softevo.charts.curve.data[0].length >= {committed}", timeout=30000
+    )
+    drawn = page.evaluate("window.softevo.charts.curve.data[0]")
+    assert drawn == list(range(len(drawn)))
+    # the run's own Cancel button stops it
+    page.click("#summary button:has-text('Cancel')")
+    wait(lambda: server.get(f"/runs/{run_id}").json()["status"] == "cancelled", 15, "cancelled")
+    page.wait_for_function(
+        "document.getElementById('summary').textContent.includes('cancelled')", timeout=15000
+    )
 
 
 def test_a_run_started_from_the_page_appears(

@@ -172,6 +172,7 @@ function chart(id, title, options, data, parent) {
 
 async function runView(runId) {
   softevo.view = "run";
+  softevo.replay = softevo.dots = softevo.failedDots = null;  // nothing of the last view's
   let run = await api(`/runs/${runId}`);
   const population = run.config.population;
   const summary = h("div", { id: "summary" });
