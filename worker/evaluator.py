@@ -211,8 +211,9 @@ class RQEvaluator:
         status = job.get_status(refresh=False)
         if status == JobStatus.FINISHED and not self.connection.llen(result_key(key_of(job_id))):
             # The job pushes its result before RQ marks it finished, so a finished job with an
-            # empty result list lost its result (the list expired, or Redis lost it): run again.
-            return "vanished"
+            # empty result list lost its result (the list expired or was lost, or what it pushed
+            # was malformed and skipped): another attempt, counted, so it can never loop.
+            return "failed"
         if status in (JobStatus.FAILED, JobStatus.STOPPED, JobStatus.CANCELED):
             return "failed"
         if status == JobStatus.QUEUED:

@@ -589,6 +589,48 @@ def test_a_batch_whose_job_raises(redis_server: RedisServer, workers: Workers) -
                     "softevo-raises-3-a1", "softevo-raises-a1"]  # fmt: skip
 
 
+def test_a_job_that_finishes_without_a_result_is_retried_not_waited_on(
+    redis_server: RedisServer, workers: Workers
+) -> None:
+    """RQ marks the job finished but nothing lands on the batch's result list: the evaluator
+    tries again (counted attempts), then robot by robot, and only the robot whose job never
+    reports is failed; it does not wait forever, and it does not loop."""
+    start_workers(workers, "f1")
+    evolution = Evolution.start(resolve({**REQUEST, "sim": {"duration": 3.0}}))
+    files = [robot_to_json(evolution.robot(item)) for item in evolution.algorithm.ask()][:2]
+    silent = {**copy.deepcopy(files[1]), "poison": True}
+    expected = SerialEvaluator().evaluate(files[:1])
+    evaluator = RQEvaluator(
+        redis_server.url,
+        poll_seconds=0.2,
+        job_function="tests.worker.poison_job.evaluate_batch_silently",
+    )
+    redis = Redis.from_url(redis_server.url)
+    try:
+        outcome: list[Any] = []
+        thread = threading.Thread(
+            target=lambda: outcome.append(evaluator.evaluate_batch([files[0], silent], "silent")),
+            daemon=True,
+        )
+        started = time.monotonic()
+        thread.start()
+        thread.join(60)
+        elapsed = time.monotonic() - started
+        assert not thread.is_alive(), "the evaluator waits forever on a finished job"
+        jobs = sorted(
+            key.decode().removeprefix("rq:job:") for key in redis.keys("rq:job:softevo-*")
+        )
+    finally:
+        evaluator.close()
+        redis.close()
+    print(f"\n[f] a job finishing without a result: settled in {elapsed:.2f} s, jobs {jobs}")
+    result = outcome[0]
+    assert np.array_equal(result.fitness[:1], expected) and math.isnan(result.fitness[1])
+    assert jobs == ["softevo-silent-0-a1", "softevo-silent-1-a1", "softevo-silent-1-a2",
+                    "softevo-silent-1-a3", "softevo-silent-a1", "softevo-silent-a2",
+                    "softevo-silent-a3"]  # fmt: skip
+
+
 def test_a_batch_taken_by_a_worker_paused_while_idle_is_run_elsewhere(
     redis_server: RedisServer, workers: Workers
 ) -> None:
