@@ -18,7 +18,8 @@ if TYPE_CHECKING:
 Row = Mapping[str, Any]
 
 
-def _pyplot() -> Any:
+def pyplot() -> Any:
+    """matplotlib's pyplot on the Agg backend (no screen), in softevo's figure style."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -98,7 +99,7 @@ def draw_diversity(axes: Any, rows: Sequence[Row], title: str) -> None:
 
 
 def _single(draw: Any, data: Sequence[Row], title: str, height: float = 3.4) -> Figure:
-    plt = _pyplot()
+    plt = pyplot()
     figure, axes = plt.subplots(figsize=(5.5, height))
     draw(axes, data, title)
     figure.tight_layout()
@@ -122,7 +123,7 @@ def diversity_figure(rows: Sequence[Row], title: str = "diversity") -> Figure:
 
 def panel_figure(curve: Sequence[Row], individuals: Sequence[Row], title: str = "") -> Figure:
     """All three, stacked, for one run: Figure 4(b)-(d) in one file."""
-    plt = _pyplot()
+    plt = pyplot()
     figure, axes = plt.subplots(3, 1, figsize=(6.0, 9.0), sharex=True)
     suffix = f": {title}" if title else ""
     draw_curve(axes[0], curve, "learning curve" + suffix)
@@ -136,7 +137,7 @@ def panel_figure(curve: Sequence[Row], individuals: Sequence[Row], title: str = 
 
 def write(figure: Figure, target: BinaryIO | Path) -> None:
     """Write a PNG and free the figure (many figures in one process would otherwise pile up)."""
-    plt = _pyplot()
+    plt = pyplot()
     figure.savefig(target, format="png")
     plt.close(figure)
 

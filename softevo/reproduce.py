@@ -51,6 +51,9 @@ PAPER_NINE = [
     (9, 9, 2),
 ]
 FINAL = {"completed", "failed", "cancelled"}
+#: 2 pi rad/s: one actuation period a second, 9 in paper-voxel's clock (1.4 at the paper's 1 rad/s)
+FAST_OMEGA = 2 * math.pi
+CLOCK = ("clock", "omega 2pi")  # the boxes' sweep again at FAST_OMEGA
 GA_ON_FOCUS = ("ablation", "paper settings")  # the GA at the paper's settings on the focus box
 REFERENCES = {"paper settings", "GA (paper-voxel)"}  # the GA rows others are compared with
 
@@ -69,6 +72,8 @@ class Plan:
     climbers: int = 5  # hill climber population: the best and 4 mutants per generation
     # more seeds on the focus box (GA, baselines, ablation): its comparisons are the noisiest
     extra_focus_seeds: list[int] = field(default_factory=list)
+    # the boxes again with a faster actuation, so the fitness clock spans many periods
+    clock_sim: dict[str, Any] = field(default_factory=lambda: {"omega": FAST_OMEGA})
 
     @property
     def focus_seeds(self) -> list[int]:
@@ -81,7 +86,7 @@ FULL = Plan(
     voxel={"preset": "paper-voxel"},
     cube={"preset": "paper-cube"},
     focus=(4, 4, 4),
-    encoding_boxes=[(4, 4, 3), (4, 4, 4), (5, 5, 3)],
+    encoding_boxes=PAPER_NINE,
     ablation={
         "tournament selection": {"selection": "tournament"},
         "mutation 0.5": {"mutation_probability": 0.5},
@@ -282,6 +287,7 @@ class Experiments:
         self.plan = plan
         self.groups: list[Group] = []
         self.sweep_id: int | None = None
+        self.clock_sweep_id: int | None = None
         self.reused = 0
         self._curves: dict[int, list[dict[str, Any]]] = {}
         # with resume: runs not in a sweep, by resolved config, and sweeps, by request
@@ -337,6 +343,15 @@ class Experiments:
         self.sweep_id = sweep["id"]
         for box in sweep["boxes"]:
             group = Group("boxes", "paper-voxel", tuple(box["shape"]))
+            group.run_ids = list(box["run_ids"])
+            self.groups.append(group)
+        sim = {**plan.voxel.get("sim", {}), **plan.clock_sim}
+        clock = self.submit_sweep(
+            {**plan.voxel, "sim": sim, "shapes": [list(s) for s in plan.boxes], "seeds": plan.seeds}
+        )
+        self.clock_sweep_id = clock["id"]
+        for box in clock["boxes"]:
+            group = Group(*CLOCK, tuple(box["shape"]))
             group.run_ids = list(box["run_ids"])
             self.groups.append(group)
         cube = Group("phase 2", "paper-cube", (1, 1, 1))
@@ -513,27 +528,6 @@ class Experiments:
                 return items
 
 
-def _pyplot() -> Any:
-    """matplotlib on the Agg backend (no screen), in the style of `core.figures`."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    plt.rcParams.update(
-        {
-            "figure.dpi": 110,
-            "savefig.dpi": 150,
-            "font.size": 9,
-            "axes.grid": True,
-            "grid.alpha": 0.3,
-            "axes.spines.top": False,
-            "axes.spines.right": False,
-        }
-    )
-    return plt
-
-
 # -- phase 1 ---------------------------------------------------------------------------------------
 
 
@@ -549,7 +543,7 @@ def breathing_cube(out: Path, quick: bool) -> dict[str, Any]:
     assert trajectory is not None
     heights = trajectory.frames[:, :, 2].mean(axis=1)
     xs = trajectory.frames[:, :, 0].mean(axis=1)
-    plt = _pyplot()
+    plt = figures.pyplot()
     figure, axes = plt.subplots(figsize=(5.5, 3.0))
     axes.plot(trajectory.times, heights, label="centre of mass height (m)")
     axes.plot(trajectory.times, xs - xs[0], label="centre of mass x shift (m)")
@@ -573,37 +567,44 @@ LONGER = (1, 3, 6)  # multiples of the run's simulated time
 
 
 def champions(experiments: Experiments, out: Path) -> list[dict[str, Any]]:
-    """The fastest robot of each box (`GET /runs/{id}/best`, saved as best_<box>.json),
-    simulated in this process for 1x (the fitness the run stored, as a check), 3x and 6x the
-    run's time: a fitness clock of a few actuation periods can reward a transient lunge, and
-    this shows which boxes' robots keep their speed."""
+    """The fastest robot of each box, at the paper's actuation and at FAST_OMEGA
+    (`GET /runs/{id}/best`, saved as best_<box>.json and best_fast_<box>.json), simulated in
+    this process for 1x (the fitness the run stored, as a check), 3x and 6x the run's time: a
+    fitness clock of a few actuation periods can reward a transient lunge, and this shows
+    which robots keep their speed."""
     from core.physics import simulate
     from core.robot_file import parse_robot, with_sim
 
     rows = []
-    for shape in experiments.plan.boxes:
-        group = experiments.group("boxes", "paper-voxel", shape)
-        done = [r for r in group.runs if r["progress"]["best_fitness"] is not None]
-        if not done:
-            continue
-        run = max(done, key=lambda r: r["progress"]["best_fitness"])
-        data = _check(experiments.client.get(f"/runs/{run['id']}/best"))
-        box = "x".join(map(str, shape))
-        (out / f"best_{box}.json").write_text(json.dumps(data, indent=1) + "\n")
-        robot = parse_robot(data)
-        row: dict[str, Any] = {
-            "shape": box,
-            "run": run["id"],
-            "seed": run["seed"],
-            "stored_best": run["progress"]["best_fitness"],
-            "voxels": sum(label != "empty" for label in data["voxels"]),
-        }
-        for factor in LONGER:
-            duration = robot.sim.duration * factor
-            result, _ = simulate(with_sim(robot, duration=duration))
-            row[f"speed_{factor}x"] = result.speed
-            row[f"duration_{factor}x"] = duration
-        rows.append(row)
+    for (experiment, variant), prefix in (
+        ((("boxes", "paper-voxel")), "best"),
+        (CLOCK, "best_fast"),
+    ):
+        for shape in experiments.plan.boxes:
+            group = experiments.group(experiment, variant, shape)
+            done = [r for r in group.runs if r["progress"]["best_fitness"] is not None]
+            if not done:
+                continue
+            run = max(done, key=lambda r: r["progress"]["best_fitness"])
+            data = _check(experiments.client.get(f"/runs/{run['id']}/best"))
+            box = "x".join(map(str, shape))
+            (out / f"{prefix}_{box}.json").write_text(json.dumps(data, indent=1) + "\n")
+            robot = parse_robot(data)
+            row: dict[str, Any] = {
+                "experiment": experiment,
+                "omega": robot.sim.omega,
+                "shape": box,
+                "run": run["id"],
+                "seed": run["seed"],
+                "stored_best": run["progress"]["best_fitness"],
+                "voxels": sum(label != "empty" for label in data["voxels"]),
+            }
+            for factor in LONGER:
+                duration = robot.sim.duration * factor
+                result, _ = simulate(with_sim(robot, duration=duration))
+                row[f"speed_{factor}x"] = result.speed
+                row[f"duration_{factor}x"] = duration
+            rows.append(row)
     with (out / "champions.csv").open("w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=list(rows[0]) if rows else ["shape"])
         writer.writeheader()
@@ -618,16 +619,17 @@ def champions_table(rows: list[dict[str, Any]]) -> list[str]:
     return [
         "## champions, simulated for longer",
         "",
-        "The fastest robot of each box (best_<box>.json), simulated again in process for the "
-        "run's own time (the first column must equal the stored best) and longer.",
+        "The fastest robot of each box, at the paper's actuation (boxes) and at 2 pi rad/s "
+        "(clock): best_<box>.json and best_fast_<box>.json, simulated again in process for the "
+        "run's own time (the first speed must equal the stored best) and longer.",
         "",
-        "| box | run | seed | voxels | stored best (m/s) | "
+        "| experiment | omega (rad/s) | box | run | seed | voxels | stored best (m/s) | "
         + " | ".join(f"speed over {d} (m/s)" for d in durations)
         + " |",
-        "| --- | ---: | ---: | ---: | ---: |" + " ---: |" * len(LONGER),
+        "| --- | ---: | --- | ---: | ---: | ---: | ---: |" + " ---: |" * len(LONGER),
         *(
-            f"| {r['shape']} | {r['run']} | {r['seed']} | {r['voxels']} | "
-            f"{_fmt(r['stored_best'])} | "
+            f"| {r['experiment']} | {r['omega']:.4g} | {r['shape']} | {r['run']} | {r['seed']} "
+            f"| {r['voxels']} | {_fmt(r['stored_best'])} | "
             + " | ".join(_fmt(r[f"speed_{f}x"]) for f in LONGER)
             + " |"
             for r in rows
@@ -707,7 +709,7 @@ def write_tables(
 
 
 def _bars(groups: list[Group], labels: list[str], title: str, path: Path) -> None:
-    plt = _pyplot()
+    plt = figures.pyplot()
     figure, axes = plt.subplots(figsize=(6.5, 3.4))
     for x, group in enumerate(groups):
         best = [r["progress"]["best_fitness"] or 0.0 for r in group.runs]
@@ -719,6 +721,28 @@ def _bars(groups: list[Group], labels: list[str], title: str, path: Path) -> Non
     axes.set_title(title)
     figure.tight_layout()
     figures.save(figure, path)
+
+
+def _paired(
+    experiments: Experiments,
+    shapes: list[tuple[int, int, int]],
+    other: tuple[str, str],
+    names: tuple[str, str],
+    title: str,
+    path: Path,
+) -> None:
+    """Bars per box: the paper-voxel sweep's box, then `other`'s (experiment, variant)."""
+    pairs = []
+    for shape in shapes:
+        pairs += [
+            experiments.group("boxes", "paper-voxel", shape),
+            experiments.group(*other, shape),
+        ]
+    labels = [
+        f"{'x'.join(map(str, g.shape))} {names[0] if g.experiment == 'boxes' else names[1]}"
+        for g in pairs
+    ]
+    _bars(pairs, labels, title, path)
 
 
 def write_figures(experiments: Experiments, out: Path) -> dict[str, Any]:
@@ -764,20 +788,21 @@ def write_figures(experiments: Experiments, out: Path) -> dict[str, Any]:
         out / "baselines.png",
         by="evaluations",
     )
-    pairs = []
-    for shape in plan.encoding_boxes:
-        pairs += [
-            experiments.group("boxes", "paper-voxel", shape),
-            experiments.group("encodings", "spring", shape),
-        ]
-    _bars(
-        pairs,
-        [
-            f"{'x'.join(map(str, g.shape))} {'voxel' if g.experiment == 'boxes' else 'spring'}"
-            for g in pairs
-        ],
-        "voxel against spring encoding",
+    _paired(
+        experiments,
+        plan.encoding_boxes,
+        ("encodings", "spring"),
+        ("voxel", "spring"),
+        "voxel against spring encoding (bars: mean, dots: seeds)",
         out / "encodings.png",
+    )
+    _paired(
+        experiments,
+        plan.boxes,
+        CLOCK,
+        ("1 rad/s", "2 pi"),
+        "the boxes at the paper's actuation (1 rad/s) and at 2 pi rad/s",
+        out / "clock.png",
     )
     ablation = [g for g in experiments.groups if g.experiment == "ablation"]
     _bars(
@@ -804,7 +829,7 @@ def _curves(
     experiments: Experiments, groups: list[tuple[str, Group]], title: str, path: Path, by: str
 ) -> None:
     """Best so far of every run of each group, against generation or cumulative evaluations."""
-    plt = _pyplot()
+    plt = figures.pyplot()
     figure, axes = plt.subplots(figsize=(6.0, 3.4))
     colours = ["tab:blue", "tab:orange", "tab:green", "tab:red"]
     for k, (label, group) in enumerate(groups):
@@ -871,7 +896,8 @@ def reproduce_command(args: argparse.Namespace) -> int:
         f"Command: `softevo reproduce{flags} --out {out}"
         + (f" --url {args.url}" if args.url else "")
         + f"`; {len(runs)} runs through the REST API{reused}, sweep {experiments.sweep_id} "
-        f"holds the boxes; this machine has {os.cpu_count()} cores.",
+        f"holds the boxes and sweep {experiments.clock_sweep_id} the boxes at 2 pi rad/s; this "
+        f"machine has {os.cpu_count()} cores.",
         f"Wall time: {experiments.busy():.0f} s with at least one run going (the union of the "
         f"runs' start-to-finish intervals, from the API); the runs' own wall times add up to "
         f"{sum(walls):.0f} s"

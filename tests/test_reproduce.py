@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 import shutil
 import sqlite3
 import statistics
@@ -16,7 +17,7 @@ import pytest
 FIGURES = [
     "fig4a_boxes.png", "fig4b_curve.png", "fig4c_population.png", "fig4d_diversity.png",
     "phase1_breathing_cube.png", "phase2_cube.png", "baselines.png", "encodings.png",
-    "ablation.png", "ablation_curves.png",
+    "ablation.png", "ablation_curves.png", "clock.png",
 ]  # fmt: skip
 
 
@@ -44,21 +45,27 @@ def rows(out: Path) -> list[dict[str, str]]:
 @pytest.mark.slow
 def test_every_table_and_figure_is_written(results: Path) -> None:
     experiments = {row["experiment"] for row in rows(results)}
-    assert experiments == {"boxes", "phase 2", "encodings", "ablation", "baselines"}
+    assert experiments == {"boxes", "clock", "phase 2", "encodings", "ablation", "baselines"}
     for name in FIGURES:
         data = (results / name).read_bytes()
         assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 5000, name
     # each box's fastest robot, simulated again: the run's own time gives the stored best
     with (results / "champions.csv").open() as handle:
         champions = list(csv.DictReader(handle))
-    assert [row["shape"] for row in champions] == ["2x2x2", "3x2x2"]
-    boxes = {row["shape"]: row for row in rows(results) if row["experiment"] == "boxes"}
+    assert [(row["experiment"], row["shape"]) for row in champions] == [
+        ("boxes", "2x2x2"), ("boxes", "3x2x2"), ("clock", "2x2x2"), ("clock", "3x2x2"),
+    ]  # fmt: skip
     for row in champions:
         assert float(row["speed_1x"]) == float(row["stored_best"])
-        assert float(row["stored_best"]) == float(boxes[row["shape"]]["best_max"])
-        robot = json.loads((results / f"best_{row['shape']}.json").read_text())
+        table = {r["shape"]: r for r in rows(results) if r["experiment"] == row["experiment"]}
+        assert float(row["stored_best"]) == float(table[row["shape"]]["best_max"])
+        prefix = "best" if row["experiment"] == "boxes" else "best_fast"
+        robot = json.loads((results / f"{prefix}_{row['shape']}.json").read_text())
         assert robot["format"] == "softevo.robot/1"
         assert "x".join(map(str, robot["shape"])) == row["shape"]
+        # the clock's robots were evolved, and are replayed, at 2 pi rad/s
+        omega = 2 * math.pi if row["experiment"] == "clock" else 1.0
+        assert robot["sim"]["omega"] == pytest.approx(omega) == float(row["omega"])
     text = (results / "results.md").read_text()
     assert "## boxes" in text and "Phase 1" in text and "Figure 4(b)-(d): run" in text
     assert "## champions, simulated for longer" in text
@@ -71,16 +78,21 @@ def test_the_table_is_what_the_service_stored(results: Path) -> None:
         runs = db.execute(
             "SELECT config, best_fitness, status, sweep_id, evaluations FROM runs"
         ).fetchall()
-    swept: dict[str, list[float]] = {}
+    swept: dict[tuple[str, str], list[float]] = {}  # (experiment, box): bests
     for config, best, status, sweep_id, _ in runs:
         if sweep_id is not None:
             assert status == "completed"
-            swept.setdefault("x".join(map(str, json.loads(config)["shape"])), []).append(best)
+            settings = json.loads(config)
+            experiment = "clock" if settings["sim"]["omega"] != 1.0 else "boxes"
+            box = "x".join(map(str, settings["shape"]))
+            swept.setdefault((experiment, box), []).append(best)
+    assert set(swept) == {(e, b) for e in ("boxes", "clock") for b in ("2x2x2", "3x2x2")}
+    for row in rows(results):
+        if row["experiment"] in ("boxes", "clock"):
+            bests = swept[row["experiment"], row["shape"]]
+            assert float(row["best_mean"]) == pytest.approx(statistics.fmean(bests))
+            assert row["completed"] == "2"
     boxes = [row for row in rows(results) if row["experiment"] == "boxes"]
-    assert {row["shape"] for row in boxes} == set(swept) == {"2x2x2", "3x2x2"}
-    for row in boxes:
-        assert float(row["best_mean"]) == pytest.approx(statistics.fmean(swept[row["shape"]]))
-        assert row["completed"] == "2"
     # the focus box's GA: the sweep's seeds and one more; the same runs in both of its tables
     table = {(row["experiment"], row["variant"]): row for row in rows(results)}
     ga = table["baselines", "GA (paper-voxel)"]
@@ -95,7 +107,7 @@ def test_the_table_is_what_the_service_stored(results: Path) -> None:
     # and every variant's best within the GA's simulations is at most its best
     encodings_budget = float(next(r for r in boxes if r["shape"] == "2x2x2")["evaluations_mean"])
     for row in rows(results):
-        if row["experiment"] in ("boxes", "phase 2") or "paper" in row["variant"]:
+        if row["experiment"] in ("boxes", "clock", "phase 2") or "paper" in row["variant"]:
             assert row["budget"] == "", row
             continue
         expected = encodings_budget if row["experiment"] == "encodings" else budget

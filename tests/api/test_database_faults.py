@@ -10,7 +10,7 @@ from __future__ import annotations
 import random
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import pytest
@@ -63,7 +63,9 @@ class Watcher:
     """Checks, over its own connection, that every committed generation is whole."""
 
     def __init__(self, url: str, run_id: int) -> None:
-        self.engine = create_engine(url.replace("postgresql://", "postgresql+psycopg://", 1))
+        self.engine = create_engine(
+            url.replace("postgresql://", "postgresql+psycopg://", 1), pool_pre_ping=True
+        )
         self.run_id = run_id
         self.checks = 0
 
@@ -171,39 +173,56 @@ def test_connections_terminated_again_and_again_during_commits(
     watcher.engine.dispose()
 
 
+def ride_out(
+    client: TestClient,
+    watched: str,
+    undisturbed: list[dict[str, Any]],
+    down: Callable[[], None],
+    up: Callable[[], None],
+    watch_while_down: bool = True,
+) -> str:
+    """Start a run; once a generation is committed take the database `down` for 3 s (every
+    answer meanwhile 503 JSON, writes included), bring it `up`; the API must recover by itself
+    and the run complete with the undisturbed curve. `watched` is where the watcher checks that
+    no generation is half written (while down too, if it can reach it). What happened, in words."""
+    run_id = client.post("/runs", json=REQUEST).json()["id"]
+    watcher = Watcher(watched, run_id)
+    deadline = time.monotonic() + 30
+    while client.get(f"/runs/{run_id}").json()["progress"]["generation"] < 1:
+        assert time.monotonic() < deadline, "no generation committed before the fault"
+        time.sleep(0.05)
+    down()
+    went = time.monotonic()
+    answers = 0
+    while time.monotonic() - went < 3.0:
+        answers += check_unavailable(client, run_id)
+        if watch_while_down:
+            watcher.check()
+        time.sleep(0.2)
+    up()
+    back = time.monotonic()
+    while client.get("/healthz").status_code != 200:
+        assert time.monotonic() - back < 10, "the API did not recover by itself"
+        time.sleep(0.05)
+    answering = time.monotonic() - back
+    run = wait_done(client, run_id, timeout=90, watcher=watcher)
+    check_completed(client, run, undisturbed)
+    watcher.engine.dispose()
+    return (
+        f"away for {back - went:.2f} s ({answers} answers, all 503 JSON); the API answered again "
+        f"{answering:.2f} s after it came back, and the run completed "
+        f"{time.monotonic() - back:.2f} s after ({run['takeovers']} takeovers)"
+    )
+
+
 def test_database_host_cut_off_then_back(database: str, undisturbed: list[dict[str, Any]]) -> None:
     url = make_url(database)
     proxy = TcpProxy((url.host or "127.0.0.1", url.port or 5432))
     through = url.set(host="127.0.0.1", port=proxy.port).render_as_string(False)
     with make_client(through) as client:
-        run_id = client.post("/runs", json=REQUEST).json()["id"]
-        watcher = Watcher(database, run_id)
-        deadline = time.monotonic() + 30
-        while client.get(f"/runs/{run_id}").json()["progress"]["generation"] < 1:
-            assert time.monotonic() < deadline, "no generation committed before the cut"
-            time.sleep(0.05)
-        proxy.down()
-        down = time.monotonic()
-        answers = 0
-        while time.monotonic() - down < 3.0:
-            answers += check_unavailable(client, run_id)
-            watcher.check()
-            time.sleep(0.2)
-        proxy.up()
-        up = time.monotonic()
-        while client.get("/healthz").status_code != 200:
-            assert time.monotonic() - up < 10, "the API did not recover by itself"
-            time.sleep(0.05)
-        answering = time.monotonic() - up
-        run = wait_done(client, run_id, timeout=90, watcher=watcher)
-        print(
-            f"\n[pg] database cut off for {up - down:.2f} s ({answers} answers, all 503 JSON); "
-            f"the API answered again {answering:.2f} s after it came back, and the run completed "
-            f"{time.monotonic() - up:.2f} s after ({run['takeovers']} takeovers)"
-        )
-        check_completed(client, run, undisturbed)
+        said = ride_out(client, database, undisturbed, proxy.down, proxy.up)
     proxy.down()
-    watcher.engine.dispose()
+    print(f"\n[pg] database host cut off: {said}")
 
 
 @pytest.fixture
@@ -222,33 +241,9 @@ def test_postgres_server_crashed_and_restarted(
 ) -> None:
     """The server itself goes: `pg_ctl stop -m immediate` (every backend killed, no checkpoint)
     in the middle of the run, three seconds down, then started again, crash recovery and all.
-    No cancel reaches the run while the server is away (the POST is answered 503)."""
-    url = own_postgres.url
-    with make_client(url) as client:
-        run_id = client.post("/runs", json=REQUEST).json()["id"]
-        watcher = Watcher(url, run_id)
-        deadline = time.monotonic() + 30
-        while client.get(f"/runs/{run_id}").json()["progress"]["generation"] < 1:
-            assert time.monotonic() < deadline, "no generation committed before the crash"
-            time.sleep(0.05)
-        own_postgres.crash()
-        down = time.monotonic()
-        answers = 0
-        while time.monotonic() - down < 3.0:
-            answers += check_unavailable(client, run_id)
-            time.sleep(0.2)
-        own_postgres.start()
-        up = time.monotonic()
-        while client.get("/healthz").status_code != 200:
-            assert time.monotonic() - up < 10, "the API did not recover by itself"
-            time.sleep(0.05)
-        answering = time.monotonic() - up
-        run = wait_done(client, run_id, timeout=90, watcher=watcher)
-        print(
-            f"\n[pg] PostgreSQL crashed (immediate stop) for {up - down:.2f} s ({answers} "
-            f"answers, all 503 JSON); the API answered again {answering:.2f} s after the restart, "
-            f"and the run completed {time.monotonic() - up:.2f} s after ({run['takeovers']} "
-            "takeovers)"
+    The watcher's connection goes with the server, and checks again once it is back."""
+    with make_client(own_postgres.url) as client:
+        said = ride_out(
+            client, own_postgres.url, undisturbed, own_postgres.crash, own_postgres.start, False
         )
-        check_completed(client, run, undisturbed)
-    watcher.engine.dispose()
+    print(f"\n[pg] PostgreSQL crashed (immediate stop): {said}")

@@ -547,6 +547,31 @@ def test_worker_paused_past_the_deadline_then_continued(
     print(f"[d] StartedJobRegistry empty {check_nothing_started(service):.2f} s after the run")
 
 
+def poisoned_batch(redis_url: str, job: str, batch: list[dict[str, Any]], key: str) -> Any:
+    """Evaluate `batch` through the test's job function `job` (tests/worker/poison_job.py); the
+    result, the seconds it took, and every job id it left on Redis."""
+    function = f"tests.worker.poison_job.{job}"
+    evaluator = RQEvaluator(redis_url, poll_seconds=0.2, job_function=function)
+    redis = Redis.from_url(redis_url)
+    try:
+        outcome: list[Any] = []
+        thread = threading.Thread(
+            target=lambda: outcome.append(evaluator.evaluate_batch(batch, key)), daemon=True
+        )
+        started = time.monotonic()
+        thread.start()
+        thread.join(60)
+        elapsed = time.monotonic() - started
+        assert not thread.is_alive(), f"the evaluator never settles a batch of {job}"
+        jobs = sorted(
+            k.decode().removeprefix("rq:job:") for k in redis.keys(f"rq:job:softevo-{key}*")
+        )
+    finally:
+        evaluator.close()
+        redis.close()
+    return outcome[0], elapsed, jobs
+
+
 def test_a_batch_whose_job_raises(redis_server: RedisServer, workers: Workers) -> None:
     """A robot file that makes the job's evaluation raise (here: marked for the test's job,
     `tests/worker/poison_job.py`) fails alone; the evaluator retries the batch robot by robot,
@@ -558,29 +583,10 @@ def test_a_batch_whose_job_raises(redis_server: RedisServer, workers: Workers) -
     poison["poison"] = True
     batch = [files[0], poison, files[1], files[2]]
     expected = SerialEvaluator().evaluate([files[0], files[1], files[2]])
-    evaluator = RQEvaluator(
-        redis_server.url, poll_seconds=0.2, job_function="tests.worker.poison_job.evaluate_batch"
-    )
-    redis = Redis.from_url(redis_server.url)
-    try:
-        outcome: list[Any] = []
-        thread = threading.Thread(
-            target=lambda: outcome.append(evaluator.evaluate_batch(batch, "raises")), daemon=True
-        )
-        started = time.monotonic()
-        thread.start()
-        thread.join(30)
-        elapsed = time.monotonic() - started
-        assert not thread.is_alive(), "the evaluator loops on a batch whose job raises"
-        result = outcome[0]
+    result, elapsed, jobs = poisoned_batch(redis_server.url, "evaluate_batch", batch, "raises")
+    with Redis.from_url(redis_server.url) as redis:
         first = fetch(redis, "softevo-raises-a1")
         assert first is not None and first.get_status() == JobStatus.FINISHED
-        jobs = sorted(
-            key.decode().removeprefix("rq:job:") for key in redis.keys("rq:job:softevo-*")
-        )
-    finally:
-        evaluator.close()
-        redis.close()
     print(f"\n[e] a batch whose job raises: {elapsed:.2f} s, jobs {jobs}")
     assert math.isnan(result.fitness[1])
     assert np.array_equal(result.fitness[[0, 2, 3]], expected, equal_nan=True)
@@ -600,31 +606,10 @@ def test_a_job_that_finishes_without_a_result_is_retried_not_waited_on(
     files = [robot_to_json(evolution.robot(item)) for item in evolution.algorithm.ask()][:2]
     silent = {**copy.deepcopy(files[1]), "poison": True}
     expected = SerialEvaluator().evaluate(files[:1])
-    evaluator = RQEvaluator(
-        redis_server.url,
-        poll_seconds=0.2,
-        job_function="tests.worker.poison_job.evaluate_batch_silently",
+    result, elapsed, jobs = poisoned_batch(
+        redis_server.url, "evaluate_batch_silently", [files[0], silent], "silent"
     )
-    redis = Redis.from_url(redis_server.url)
-    try:
-        outcome: list[Any] = []
-        thread = threading.Thread(
-            target=lambda: outcome.append(evaluator.evaluate_batch([files[0], silent], "silent")),
-            daemon=True,
-        )
-        started = time.monotonic()
-        thread.start()
-        thread.join(60)
-        elapsed = time.monotonic() - started
-        assert not thread.is_alive(), "the evaluator waits forever on a finished job"
-        jobs = sorted(
-            key.decode().removeprefix("rq:job:") for key in redis.keys("rq:job:softevo-*")
-        )
-    finally:
-        evaluator.close()
-        redis.close()
     print(f"\n[f] a job finishing without a result: settled in {elapsed:.2f} s, jobs {jobs}")
-    result = outcome[0]
     assert np.array_equal(result.fitness[:1], expected) and math.isnan(result.fitness[1])
     assert jobs == ["softevo-silent-0-a1", "softevo-silent-1-a1", "softevo-silent-1-a2",
                     "softevo-silent-1-a3", "softevo-silent-a1", "softevo-silent-a2",
