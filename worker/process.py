@@ -37,7 +37,9 @@ def run_worker(
     """Warm up, then work until stopped (or, with `burst`, until the queue is empty)."""
     from core.evaluation import warm_up
 
+    started = time.perf_counter()
     warm_up()
+    warm = time.perf_counter() - started
     log = logging.getLogger("softevo.worker")
     connection = connect(redis_url)
     connection.ping()  # fail now, with a clear error, if Redis is not there at the start
@@ -51,7 +53,7 @@ def run_worker(
             serializer=SERIALIZER,
             name=base if restart == 0 else f"{base}.r{restart}",
         )
-        log.info("worker %s: kernels warm, taking jobs", worker.name)
+        log.info("worker %s: kernels warm (%.2f s), taking jobs", worker.name, warm)
         try:
             return worker.work(burst=burst, logging_level=log_level, with_scheduler=False)
         except (RedisConnectionError, RedisTimeoutError) as error:

@@ -62,3 +62,33 @@ def test_the_api_enqueues_without_loading_the_physics(redis_server, workers, tmp
     )
     assert done.returncode == 0, done.stderr[-3000:]
     assert done.stdout.strip().splitlines()[-1] == "['physics'] False"
+
+
+def test_the_first_job_pays_no_compilation(redis_server, workers, tmp_path, monkeypatch) -> None:
+    """With an empty numba cache the kernels take seconds to compile; `softevo worker` does it
+    before it takes jobs (and says how long it took), so its first job takes no longer than its
+    second (each job's time is measured inside the job)."""
+    import re
+
+    evolution = Evolution.start(
+        resolve({"preset": "quick", "population": 4, "seed": 3, "sim": {"duration": 1.0}})
+    )
+    files = [robot_to_json(evolution.robot(item)) for item in evolution.algorithm.ask()]
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba-cache"))  # empty: it compiles
+    workers.start("warm")
+    workers.wait_ready("warm")
+    warm = float(re.search(r"kernels warm \(([\d.]+) s\)", workers.log("warm")).group(1))
+    evaluator = RQEvaluator(redis_server.url)
+    try:
+        first = evaluator.evaluate_batch(files, key="warm-first")
+        second = evaluator.evaluate_batch(files, key="warm-second")
+    finally:
+        evaluator.close()
+    print(
+        f"\nworker on an empty numba cache: warm-up (compiling) {warm:.2f} s, then its first "
+        f"job {first.seconds:.3f} s and its second {second.seconds:.3f} s"
+    )
+    assert np.array_equal(first.fitness, second.fitness, equal_nan=True)
+    assert warm > 1.0, "nothing was compiled: the comparison says nothing"
+    assert first.seconds < warm / 5
+    assert first.seconds < 2 * second.seconds + 0.05

@@ -483,10 +483,10 @@ async function sweepView(sweepId) {
   view.replaceChildren(h("h2", {}, `Sweep ${sweepId} `, status(sweep.status)),
     h("div", { class: "panel" }, table), charts);
 
-  // Figure 4(a): best speed per box, the mean as a bar and min-max as whiskers
+  // Figure 4(a): best speed per box, the mean as a bar, the best and worst seed as dots
   const x = boxes.map((_, i) => i);
   const bars = uPlot.paths.bars({ size: [0.6, 60] });
-  chart("boxes", "Best speed per bounding box (bars: mean over seeds; lines: min and max)", {
+  chart("boxes", "Best speed per bounding box (bars: mean over seeds; dots: best and worst seed)", {
     scales: { x: { time: false, range: [-0.6, boxes.length - 0.4] }, y: { range: (u, min, max) => [0, Math.max(max * 1.1, 0.01)] } },
     axes: [{ label: "bounding box", values: (u, ticks) => ticks.map((t) => (Number.isInteger(t) && boxes[t] ? box(boxes[t].shape) : "")), splits: () => x },
       { label: "speed (m/s)", size: 60 }],
