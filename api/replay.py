@@ -50,8 +50,13 @@ def replay(robot: Any, fps: float) -> dict[str, Any]:
         with _lock:
             if key in _cache:
                 return _cache[key]
-        data = _simulate(robot, mechanics, every)
-        with _lock:
+        try:
+            data = _simulate(robot, mechanics, every)
+        except BaseException:
+            with _lock:
+                _computing.pop(key, None)
+            raise
+        with _lock:  # cached before its lock goes, so a late caller finds it
             _cache[key] = data
             while len(_cache) > CACHED:
                 _cache.popitem(last=False)
