@@ -130,9 +130,12 @@ def test_a_finished_run_its_charts_and_the_replay(
     assert page.evaluate("window.softevo.replay.renderer") == "webgl"
     canvas = "document.querySelector('#replay-canvas canvas').toDataURL()"
     first = (page.evaluate("window.softevo.replay.frame"), page.evaluate(canvas))
-    page.wait_for_timeout(1200)
+    # wait for another frame, not for a fixed time: a fixed wait can be a whole loop of the
+    # 1.5 s replay on a busy machine and land on the same frame again
+    page.wait_for_function(
+        f"window.softevo.replay.frame !== {first[0]}", timeout=10000
+    )  # the replay's frame advances
     second = (page.evaluate("window.softevo.replay.frame"), page.evaluate(canvas))
-    assert second[0] != first[0], "the replay's frame did not advance"
     assert second[1] != first[1], "the canvas did not change while playing"
     shot(page, "dashboard-run")
     # pause stops it; the slider moves it; the speed control sets the pace
