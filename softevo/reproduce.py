@@ -290,29 +290,35 @@ class Experiments:
         self.clock_sweep_id: int | None = None
         self.reused = 0
         self._curves: dict[int, list[dict[str, Any]]] = {}
+        self._latest: dict[int, dict[str, Any]] = {}  # run id -> the API's last word on it
+        self._finished: set[int] = set()  # runs in a final state: never asked for again
         # with resume: runs not in a sweep, by resolved config, and sweeps, by request
         self._runs: dict[str, list[int]] = {}
         self._sweeps: list[dict[str, Any]] = []
         if resume:
             self._index_existing()
 
+    def _all_runs(self) -> Iterator[dict[str, Any]]:
+        """Every run the service holds, newest first, 200 to a request."""
+        offset = 0
+        while True:
+            page = _check(self.client.get("/runs", params={"offset": offset, "limit": 200}))
+            yield from page["items"]
+            offset += len(page["items"])
+            if not page["items"] or offset >= page["total"]:
+                return
+
     def _index_existing(self) -> None:
         """What the service already holds that a resumed reproduction may reuse: every run
         that has not failed or been cancelled (a queued or running one finishes by itself)."""
         sweep_ids: set[int] = set()
-        offset = 0
-        while True:
-            page = _check(self.client.get("/runs", params={"offset": offset, "limit": 200}))
-            for run in page["items"]:
-                if run["status"] in {"failed", "cancelled"}:
-                    continue
-                if run.get("sweep_id") is not None:
-                    sweep_ids.add(run["sweep_id"])
-                else:
-                    self._runs.setdefault(_key(run["config"]), []).append(run["id"])
-            offset += len(page["items"])
-            if not page["items"] or offset >= page["total"]:
-                break
+        for run in self._all_runs():
+            if run["status"] in {"failed", "cancelled"}:
+                continue
+            if run.get("sweep_id") is not None:
+                sweep_ids.add(run["sweep_id"])
+            else:
+                self._runs.setdefault(_key(run["config"]), []).append(run["id"])
         for ids in self._runs.values():
             ids.sort()
         self._sweeps = [_check(self.client.get(f"/sweeps/{i}")) for i in sorted(sweep_ids)]
@@ -335,25 +341,23 @@ class Experiments:
                 return sweep
         return _check(self.client.post("/sweeps", json=request))
 
-    def submit_all(self) -> None:
+    def sweep_groups(self, name: tuple[str, str], request: dict[str, Any]) -> int:
+        """The plan's boxes and seeds as one sweep of `request`, a group per box; its id."""
         plan = self.plan
         sweep = self.submit_sweep(
-            {**plan.voxel, "shapes": [list(s) for s in plan.boxes], "seeds": plan.seeds}
+            {**request, "shapes": [list(s) for s in plan.boxes], "seeds": plan.seeds}
         )
-        self.sweep_id = sweep["id"]
         for box in sweep["boxes"]:
-            group = Group("boxes", "paper-voxel", tuple(box["shape"]))
+            group = Group(*name, tuple(box["shape"]))
             group.run_ids = list(box["run_ids"])
             self.groups.append(group)
+        return int(sweep["id"])
+
+    def submit_all(self) -> None:
+        plan = self.plan
+        self.sweep_id = self.sweep_groups(("boxes", "paper-voxel"), plan.voxel)
         sim = {**plan.voxel.get("sim", {}), **plan.clock_sim}
-        clock = self.submit_sweep(
-            {**plan.voxel, "sim": sim, "shapes": [list(s) for s in plan.boxes], "seeds": plan.seeds}
-        )
-        self.clock_sweep_id = clock["id"]
-        for box in clock["boxes"]:
-            group = Group(*CLOCK, tuple(box["shape"]))
-            group.run_ids = list(box["run_ids"])
-            self.groups.append(group)
+        self.clock_sweep_id = self.sweep_groups(CLOCK, {**plan.voxel, "sim": sim})
         cube = Group("phase 2", "paper-cube", (1, 1, 1))
         for seed in plan.seeds:
             self.submit_run(cube, {**plan.cube, "seed": seed})
@@ -419,13 +423,31 @@ class Experiments:
             )
         self.groups += [reference, random_search, climber]
 
+    def refresh(self) -> None:
+        """Every group's runs as the API has them now. A finished run is kept, not asked for
+        again; the rest come from the run listing (newest first, so ours come first, 200 to a
+        request) rather than one request per run every round."""
+        wanted = {i for g in self.groups for i in g.run_ids if i not in self._finished}
+        for run in self._all_runs() if wanted else ():
+            if run["id"] in wanted:
+                wanted.discard(run["id"])
+                self._latest[run["id"]] = run
+            if not wanted:
+                break
+        for run_id in wanted:  # not listed (yet): ask for it alone
+            self._latest[run_id] = _check(self.client.get(f"/runs/{run_id}"))
+        for run_id, run in self._latest.items():
+            if run["status"] in FINAL:
+                self._finished.add(run_id)
+        for group in self.groups:
+            group.runs = [self._latest[i] for i in group.run_ids]
+
     def wait(self) -> None:
         started = time.monotonic()
         baselines = False
         last = ""
         while True:
-            for group in self.groups:
-                group.runs = [_check(self.client.get(f"/runs/{i}")) for i in group.run_ids]
+            self.refresh()
             focus = self.group(*GA_ON_FOCUS, self.plan.focus)
             if not baselines and all(r["status"] in FINAL for r in focus.runs):
                 budget = statistics.fmean(r["progress"]["evaluations"] for r in focus.runs)
