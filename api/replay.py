@@ -22,9 +22,9 @@ MAX_POSITIONS = 1_000_000
 #: Replays remembered (the newest), each at most MAX_POSITIONS positions.
 CACHED = 8
 
-_cache: OrderedDict[tuple[str, int], dict[str, Any]] = OrderedDict()
+_cache: OrderedDict[tuple[str, float], dict[str, Any]] = OrderedDict()
 _lock = threading.Lock()
-_computing: dict[tuple[str, int], threading.Lock] = {}
+_computing: dict[tuple[str, float], threading.Lock] = {}
 
 
 def record_every(robot: Any, masses: int, fps: float) -> int:
@@ -38,9 +38,7 @@ def record_every(robot: Any, masses: int, fps: float) -> int:
 
 def replay(robot: Any, fps: float) -> dict[str, Any]:
     """Frames at (up to) `fps` per simulated second; the physics loads only when asked for."""
-    mechanics = build_mechanics(robot)
-    every = record_every(robot, mechanics.n_masses, fps)
-    key = (json.dumps(robot_to_json(robot), sort_keys=True), every)
+    key = (json.dumps(robot_to_json(robot), sort_keys=True), fps)
     with _lock:
         if key in _cache:
             _cache.move_to_end(key)
@@ -51,7 +49,7 @@ def replay(robot: Any, fps: float) -> dict[str, Any]:
             if key in _cache:
                 return _cache[key]
         try:
-            data = _simulate(robot, mechanics, every)
+            data = _simulate(robot, fps)
         except BaseException:
             with _lock:
                 _computing.pop(key, None)
@@ -64,9 +62,11 @@ def replay(robot: Any, fps: float) -> dict[str, Any]:
     return data
 
 
-def _simulate(robot: Any, mechanics: Any, every: int) -> dict[str, Any]:
+def _simulate(robot: Any, fps: float) -> dict[str, Any]:
     from core.physics import simulate
 
+    mechanics = build_mechanics(robot)
+    every = record_every(robot, mechanics.n_masses, fps)
     result, trajectory = simulate(mechanics, record_every=every)
     assert trajectory is not None
     return {
