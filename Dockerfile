@@ -9,6 +9,10 @@ ENV PYTHONDONTWRITEBYTECODE=1 \
 
 RUN useradd --create-home --uid 10001 softevo
 WORKDIR /app
+COPY requirements/runtime.txt ./requirements/
+# The locked versions first (hashes checked; a layer that stays cached while only the code changes),
+# so every image, and every worker of a run, computes with the same engine.
+RUN pip install -r requirements/runtime.txt
 COPY pyproject.toml README.md ./
 COPY core ./core
 COPY api ./api
@@ -16,9 +20,9 @@ COPY worker ./worker
 COPY softevo ./softevo
 COPY migrations ./migrations
 COPY examples ./examples
-# Install as the README does. The numba cache directory exists in the image and belongs to
-# softevo, so a fresh named volume mounted there starts with that owner and stays writable.
-RUN pip install . \
+# Then the package itself on top of the lock, touching no dependency. The numba cache directory
+# exists in the image and belongs to softevo, so a fresh named volume mounted there starts with that owner and stays writable.
+RUN pip install --no-deps --no-build-isolation . \
     && mkdir -p /data "$NUMBA_CACHE_DIR" \
     && chown -R softevo:softevo /app /data /home/softevo/.cache
 

@@ -111,7 +111,11 @@ def test_dockerfile_runs_as_non_root_and_copies_every_package() -> None:
     users = [line.split()[1] for line in dockerfile.splitlines() if line.startswith("USER ")]
     assert users and users[-1] not in {"root", "0"} and not users[-1].startswith(("root:", "0:"))
     assert re.search(r"useradd .*--uid 10001 softevo", dockerfile)
-    assert re.search(r"^RUN pip install \.(\s|$)", dockerfile, re.MULTILINE), "not as the README"
+    # Through the lock CI uses (the same versions, hashes checked), then the package on top of it
+    lock = re.search(r"^RUN pip install -r requirements/runtime\.txt\s*$", dockerfile, re.MULTILINE)
+    assert lock and "COPY requirements/runtime.txt " in dockerfile, "not through the lock"
+    on_lock = re.search(r"^RUN pip install --no-deps --no-build-isolation \.\s", dockerfile, re.M)
+    assert on_lock and on_lock.start() > lock.start(), "the package is not installed on the lock"
     for package in ("core", "api", "worker", "softevo", "migrations", "examples"):
         assert f"COPY {package} " in dockerfile, f"Dockerfile does not copy {package}/"
     # The numba cache volume is mounted here: it must exist, owned by the user, in the image.
