@@ -1,1 +1,2 @@
-"""softevo's service: FastAPI app, persistence and the GA coordinator (built in a later issue)."""
+"""softevo's service (installed as `softevo.api`): the FastAPI app and dashboard, persistence
+(SQLAlchemy) and the coordinator that drives each run generation by generation."""

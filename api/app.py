@@ -22,14 +22,14 @@ from fastapi.responses import JSONResponse
 from sqlalchemy.exc import InterfaceError, OperationalError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
-from api import dashboard, storage
-from api.body_limit import BodyLimitMiddleware
-from api.coordinator import Coordinator
-from api.db import Database, alembic_config, current_revision
-from api.routes import meta, runs, sweeps, views
-from api.settings import Settings, get_settings
-from api.validation import RequestError
-from core.evaluator import Evaluator
+from softevo.api import dashboard, storage
+from softevo.api.body_limit import BodyLimitMiddleware
+from softevo.api.coordinator import Coordinator
+from softevo.api.db import Database, alembic_config, current_revision
+from softevo.api.routes import meta, runs, sweeps, views
+from softevo.api.settings import Settings, get_settings
+from softevo.api.validation import RequestError
+from softevo.core.evaluator import Evaluator
 
 log = logging.getLogger("softevo.api")
 
@@ -51,10 +51,10 @@ def default_evaluator(settings: Settings) -> Evaluator:
     """RQ workers when SOFTEVO_REDIS_URL is set (this process then never loads the physics),
     otherwise a pool of local processes."""
     if settings.redis_url:
-        from worker.evaluator import RQEvaluator
+        from softevo.worker.evaluator import RQEvaluator
 
         return RQEvaluator(settings.redis_url, concurrency=settings.queued_batches)
-    from core.evaluation import make_evaluator
+    from softevo.core.evaluation import make_evaluator
 
     return make_evaluator(settings.workers, min_chunk=settings.batch_size)
 

@@ -30,16 +30,17 @@ import numpy as np
 from sqlalchemy import select, update
 from sqlalchemy.exc import InterfaceError, OperationalError
 
-from api import leases
-from api.db import Database
-from api.models import Generation, Individual, Run
-from api.storage import now
-from core.config import RunConfig
-from core.evaluator import BatchResult, Evaluator, batch_digest, split_evenly
-from core.ga.algorithm import GAState, GeneticAlgorithm
-from core.ga.algorithm import Individual as GAIndividual
-from core.ga.stats import GenerationStats
-from core.robot_file import robot_to_json
+from softevo.api import leases
+from softevo.api.db import Database
+from softevo.api.models import Generation, Individual, Run
+from softevo.api.storage import now
+from softevo.core.config import RunConfig
+from softevo.core.evaluator import BatchResult, Evaluator, batch_digest, split_evenly
+from softevo.core.ga.algorithm import GAState, GeneticAlgorithm
+from softevo.core.ga.algorithm import Individual as GAIndividual
+from softevo.core.ga.stats import GenerationStats
+from softevo.core.limits import BATCH_SIZE
+from softevo.core.robot_file import robot_to_json
 
 log = logging.getLogger("softevo.coordinator")
 
@@ -311,7 +312,7 @@ class Coordinator:
         evaluator: Evaluator,
         *,
         max_running: int = 2,
-        batch_size: int = 8,
+        batch_size: int = BATCH_SIZE,
         parallel_batches: int | None = None,
         lease_seconds: float = 15.0,
         poll_seconds: float = 0.5,

@@ -19,7 +19,7 @@ from sqlalchemy import Engine, create_engine, event, text
 from sqlalchemy.engine import make_url
 from sqlalchemy.orm import Session, sessionmaker
 
-import migrations
+from softevo import migrations
 
 MIGRATIONS = Path(migrations.__file__).resolve().parent
 SQLITE_BUSY_MS = 30_000

@@ -8,9 +8,9 @@ from typing import Annotated
 from fastapi import Depends, HTTPException, Request, status
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 
-from api.coordinator import Coordinator
-from api.db import Database
-from api.settings import Settings
+from softevo.api.coordinator import Coordinator
+from softevo.api.db import Database
+from softevo.api.settings import Settings
 
 
 def get_settings(request: Request) -> Settings:

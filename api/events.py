@@ -12,8 +12,8 @@ from typing import Any
 from fastapi import Request
 from starlette.concurrency import run_in_threadpool
 
-from api import storage
-from api.db import Database
+from softevo.api import storage
+from softevo.api.db import Database
 
 POLL_SECONDS = 0.25
 KEEPALIVE_SECONDS = 15.0

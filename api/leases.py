@@ -14,9 +14,9 @@ import time
 from sqlalchemy import case, or_, select, update
 from sqlalchemy.orm import Session
 
-from api.db import Database
-from api.models import Run
-from api.storage import now
+from softevo.api.db import Database
+from softevo.api.models import Run
+from softevo.api.storage import now
 
 
 def _orphaned(at: float):  # type: ignore[no-untyped-def]

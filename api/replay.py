@@ -14,8 +14,8 @@ import threading
 from collections import OrderedDict
 from typing import Any
 
-from core.robot import build_mechanics
-from core.robot_file import robot_to_json
+from softevo.core.robot import build_mechanics
+from softevo.core.robot_file import robot_to_json
 
 #: Most mass positions one replay carries (frames x masses), about 20 MB of JSON.
 MAX_POSITIONS = 1_000_000
@@ -63,7 +63,7 @@ def replay(robot: Any, fps: float) -> dict[str, Any]:
 
 
 def _simulate(robot: Any, fps: float) -> dict[str, Any]:
-    from core.physics import simulate
+    from softevo.core.physics import simulate
 
     mechanics = build_mechanics(robot)
     every = record_every(robot, mechanics.n_masses, fps)

@@ -12,8 +12,9 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, create_model
 
-from core.config import MAX_SIDE, PAPER_NINE_SHAPES
-from core.ga.algorithm import GAConfig
+from softevo.core.config import PAPER_NINE_SHAPES
+from softevo.core.ga.algorithm import GAConfig
+from softevo.core.limits import MAX_SIDE
 
 Side = Annotated[int, Field(ge=1, le=MAX_SIDE)]
 Shape = tuple[Side, Side, Side]

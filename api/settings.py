@@ -11,6 +11,8 @@ import os
 from dataclasses import dataclass, field, fields
 from functools import lru_cache
 
+from softevo.core.limits import BATCH_SIZE, MAX_VOXELS, SERVICE_MAX_VOXELS
+
 DEFAULT_DATABASE_URL = "sqlite:///softevo.db"
 
 
@@ -20,7 +22,7 @@ class Limits:
 
     max_population: int = 1000
     max_generations: int = 10_000
-    max_voxels: int = 512
+    max_voxels: int = SERVICE_MAX_VOXELS
     max_duration: float = 60.0  # simulated seconds per robot
     min_dt: float = 1e-4  # s
     max_evaluations: int = 1_000_000  # population x generations
@@ -38,7 +40,7 @@ class Settings:
     api_token: str | None = None
     max_running: int = 2  # runs driven at once by this process; the rest wait, queued
     workers: int | None = None  # in-process pool size (default: one per core)
-    batch_size: int = 4  # robots per evaluator call; fitness is saved batch by batch
+    batch_size: int = BATCH_SIZE  # robots per evaluator call; fitness is saved batch by batch
     queued_batches: int = 64  # with RQ: batches of one run in flight at once
     lease_seconds: float = 15.0  # a coordinator that stops heartbeating loses its runs after this
     poll_seconds: float = 0.5  # how often the scheduler looks for queued or orphaned runs
@@ -66,6 +68,8 @@ class Settings:
                 raise ValueError(f"SOFTEVO_{name.upper()}: must be >= 1")
         if settings.limits.max_queued < 1 or settings.limits.max_body_bytes < 1024:
             raise ValueError("SOFTEVO_MAX_QUEUED must be >= 1, SOFTEVO_MAX_BODY_BYTES >= 1024")
+        if not 1 <= settings.limits.max_voxels <= MAX_VOXELS:
+            raise ValueError(f"SOFTEVO_MAX_VOXELS: must be between 1 and {MAX_VOXELS}")
         if settings.workers is not None and settings.workers < 1:
             raise ValueError("SOFTEVO_WORKERS: must be >= 1")
         if settings.lease_seconds <= 0 or settings.poll_seconds <= 0:

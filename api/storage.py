@@ -14,10 +14,10 @@ from typing import Any
 
 from sqlalchemy import func, select, update
 
-from api.db import Database
-from api.models import ACTIVE_STATUSES, Generation, Individual, Run, Sweep
-from core.config import RunConfig
-from core.ga.stats import CURVE_COLUMNS
+from softevo.api.db import Database
+from softevo.api.models import ACTIVE_STATUSES, Generation, Individual, Run, Sweep
+from softevo.core.config import RunConfig
+from softevo.core.ga.stats import CURVE_COLUMNS
 
 
 def now() -> datetime:

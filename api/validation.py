@@ -10,8 +10,8 @@ import math
 import re
 from typing import Any
 
-from api.settings import Limits
-from core.config import ConfigError, RunConfig, resolve
+from softevo.api.settings import Limits
+from softevo.core.config import ConfigError, RunConfig, resolve
 
 _FIELD = re.compile(r"^([A-Za-z_][\w.]*): ")
 

@@ -35,7 +35,7 @@ from benchlib import cpu_model, free_port
 from sqlalchemy import create_engine, text
 from sqlalchemy.engine import make_url
 
-from api.db import Database, normalise_url, scratch_postgres
+from softevo.api.db import Database, normalise_url, scratch_postgres
 
 DEFAULT_POSTGRES = os.environ.get(
     "SOFTEVO_TEST_POSTGRES", "postgresql://postgres@127.0.0.1:5432/test"
@@ -80,7 +80,7 @@ def serve(database_url: str, workdir: Path) -> Iterator[str]:
     env = {k: v for k, v in os.environ.items() if not k.startswith("SOFTEVO_")}
     env["SOFTEVO_DATABASE_URL"] = database_url
     log_path = workdir / f"serve-{port}.log"
-    command = [sys.executable, "-m", "softevo.cli", "serve", "--port", str(port)]
+    command = [sys.executable, "-P", "-m", "softevo.cli", "serve", "--port", str(port)]
     with log_path.open("w") as log:
         process = subprocess.Popen(
             [*command, "--log-level", "warning"],

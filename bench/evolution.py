@@ -16,10 +16,10 @@ import time
 
 import numpy as np
 
-from core.config import resolve
-from core.evaluation import PoolEvaluator, SerialEvaluator
-from core.evolution import Evolution
-from core.robot_file import robot_to_json
+from softevo.core.config import resolve
+from softevo.core.evaluation import PoolEvaluator, SerialEvaluator
+from softevo.core.evolution import Evolution
+from softevo.core.robot_file import robot_to_json
 
 
 def evaluations_per_second(files: list[dict], evaluator, repeats: int) -> tuple[float, np.ndarray]:

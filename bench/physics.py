@@ -35,9 +35,9 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from core.physics import kernels, simulate, simulate_batch
-from core.robot import Mechanics, VoxelRobot, build_mechanics
-from core.settings import SimSettings
+from softevo.core.physics import kernels, simulate, simulate_batch
+from softevo.core.robot import Mechanics, VoxelRobot, build_mechanics
+from softevo.core.settings import SimSettings
 
 ROOT = Path(__file__).resolve().parent.parent
 TARGETS = {"batch_per_core": 300e6, "single": 150e6}
@@ -125,9 +125,9 @@ FIRST_CALL_SCRIPT = textwrap.dedent(
     """
     import json, time
     started = time.perf_counter()
-    from core.physics import kernels, simulate, simulate_batch
-    from core.robot import VoxelRobot
-    from core.settings import SimSettings
+    from softevo.core.physics import kernels, simulate, simulate_batch
+    from softevo.core.robot import VoxelRobot
+    from softevo.core.settings import SimSettings
     imported = time.perf_counter() - started
     robot = VoxelRobot((2, 2, 2), ("hard",) * 8, sim=SimSettings(duration=0.01, settle_time=0.0))
     started = time.perf_counter()

@@ -8,9 +8,9 @@ diversity of the last generation.
 
 from __future__ import annotations
 
-from core.config import resolve
-from core.evaluation import PoolEvaluator
-from core.evolution import Evolution
+from softevo.core.config import resolve
+from softevo.core.evaluation import PoolEvaluator
+from softevo.core.evolution import Evolution
 
 
 def main() -> None:

@@ -53,23 +53,23 @@ import rq
 from benchlib import OtherLoad, cpu_model, free_port, redis_version
 from rq import Worker
 
-from core.config import resolve
-from core.evaluation import PoolEvaluator, SerialEvaluator, evaluate_robot_files
-from core.evolution import Evolution
-from core.robot import VoxelRobot
-from core.robot_file import robot_to_json
-from core.settings import sim_settings
-from worker.evaluator import RQEvaluator
-from worker.jobs import evaluate_batch
-from worker.queue import connect
+from softevo.core.config import resolve
+from softevo.core.evaluation import PoolEvaluator, SerialEvaluator, evaluate_robot_files
+from softevo.core.evolution import Evolution
+from softevo.core.robot import VoxelRobot
+from softevo.core.robot_file import robot_to_json
+from softevo.core.settings import sim_settings
+from softevo.worker.evaluator import RQEvaluator
+from softevo.worker.jobs import evaluate_batch
+from softevo.worker.queue import connect
 
 #: One process running RQ's WorkerPool: load the kernels, then fork the workers.
 WORKER_POOL = """
 import sys
 from rq import SimpleWorker, Worker
 from rq.worker_pool import WorkerPool
-from core.evaluation import warm_up
-from worker.queue import QUEUE, SERIALIZER, connect
+from softevo.core.evaluation import warm_up
+from softevo.worker.queue import QUEUE, SERIALIZER, connect
 url, n, kind = sys.argv[1], int(sys.argv[2]), sys.argv[3]
 warm_up()
 pool = WorkerPool([QUEUE], connection=connect(url), num_workers=n, serializer=SERIALIZER,
@@ -147,7 +147,7 @@ class Workers:
         else:
             for i in range(self.count, n):
                 name = f"{self.kind}-{i + 1}"
-                command = [sys.executable, "-m", "softevo.cli", "worker", "--url", self.url]
+                command = [sys.executable, "-P", "-m", "softevo.cli", "worker", "--url", self.url]
                 command += ["--worker-class", self.kind, "--name", name, "--log-level", "warning"]
                 self._spawn(command, f"worker-{name}.log")
         connection = connect(self.url)

@@ -58,16 +58,16 @@ import rq
 from benchlib import OtherLoad, cpu_model, free_port, redis_version
 from rq import Worker
 
-from api.settings import Settings
-from core.config import resolve
-from core.evaluation import PoolEvaluator
-from core.evaluator import split_evenly
-from core.evolution import Evolution
-from core.ga.stats import CURVE_COLUMNS
-from core.robot import VoxelRobot
-from core.robot_file import robot_to_json
-from core.settings import sim_settings
-from worker.queue import connect
+from softevo.api.settings import Settings
+from softevo.core.config import resolve
+from softevo.core.evaluation import PoolEvaluator
+from softevo.core.evaluator import split_evenly
+from softevo.core.evolution import Evolution
+from softevo.core.ga.stats import CURVE_COLUMNS
+from softevo.core.robot import VoxelRobot
+from softevo.core.robot_file import robot_to_json
+from softevo.core.settings import sim_settings
+from softevo.worker.queue import connect
 
 WORKERS = 2
 WARM_UP_RUN = {"preset": "quick", "seed": 99, "population": 8, "generations": 1}
@@ -147,7 +147,7 @@ def start_redis(processes: Processes, name: str) -> str:
 def start_workers(processes: Processes, url: str, worker_class: str) -> None:
     for i in range(WORKERS):
         name = f"worker-{worker_class}-{i + 1}"
-        command = [sys.executable, "-m", "softevo.cli", "worker", "--url", url]
+        command = [sys.executable, "-P", "-m", "softevo.cli", "worker", "--url", url]
         command += ["--worker-class", worker_class, "--name", name, "--log-level", "warning"]
         processes.start(name, command, clean_env())
     connection = connect(url)
@@ -163,7 +163,7 @@ def start_workers(processes: Processes, url: str, worker_class: str) -> None:
 def serve(processes: Processes, name: str, env: dict[str, str]) -> tuple[str, int]:
     """`softevo serve` on a free port; its base URL once /healthz answers, and its pid."""
     port = free_port()
-    command = [sys.executable, "-m", "softevo.cli", "serve", "--port", str(port)]
+    command = [sys.executable, "-P", "-m", "softevo.cli", "serve", "--port", str(port)]
     process = processes.start(name, [*command, "--log-level", "warning"], env)
     base = f"http://127.0.0.1:{port}"
     deadline = time.monotonic() + 60

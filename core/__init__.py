@@ -1,4 +1,7 @@
-"""softevo's core: voxel robots, the numba mass-spring engine, and (later) the genetic algorithm.
+"""softevo's core (installed as `softevo.core`): voxel robots and robot files, the numba
+mass-spring engine, genome encodings, the genetic algorithm and its baselines, evaluators,
+metrics and figures.
 
-Pure Python and numba: no I/O, no database, no Redis, no web framework.
+Pure Python and numba: no database, no Redis, no web framework (import-linter's contract in
+pyproject.toml).
 """

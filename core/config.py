@@ -13,13 +13,11 @@ from typing import Any, Literal
 
 from pydantic import Field, ValidationError, field_validator, model_validator
 
-from core.encodings import PAPER_CUBE_OPTIONS, Encoding, make_encoding
-from core.ga.algorithm import GAConfig
-from core.settings import SimSettings, format_validation_error
+from softevo.core.encodings import PAPER_CUBE_OPTIONS, Encoding, make_encoding
+from softevo.core.ga.algorithm import GAConfig
+from softevo.core.limits import MAX_SIDE, MAX_VOXELS
+from softevo.core.settings import SimSettings, format_validation_error
 
-#: Largest bounding-box side and voxel count of a run.
-MAX_SIDE = 16
-MAX_VOXELS = 1000
 CubeOption = tuple[float, float, float, float]
 #: The paper's nine bounding boxes (Figure 4a), in its order.
 PAPER_NINE_SHAPES: tuple[tuple[int, int, int], ...] = (

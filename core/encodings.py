@@ -21,9 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core.genome import Genome
-from core.lattice import full_lattice
-from core.robot import (
+from softevo.core.genome import Genome
+from softevo.core.lattice import full_lattice
+from softevo.core.robot import (
     GENE_BOUNDS,
     LABELS,
     SPRING_LABELS,
@@ -33,7 +33,7 @@ from core.robot import (
     SpringRobot,
     VoxelRobot,
 )
-from core.settings import SimSettings
+from softevo.core.settings import SimSettings
 
 #: The paper's phase 2 options [k, b, w, c]; it prints the third twice, we read the fourth as
 #: its negative-phase twin.

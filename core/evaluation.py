@@ -24,11 +24,11 @@ from typing import Any
 
 import numpy as np
 
-from core.evaluator import BatchResult, Evaluator
-from core.physics import simulate, simulate_batch
-from core.robot import Robot, VoxelRobot
-from core.robot_file import RobotFileError, parse_robot
-from core.settings import sim_settings
+from softevo.core.evaluator import BatchResult, Evaluator
+from softevo.core.physics import simulate, simulate_batch
+from softevo.core.robot import Robot, VoxelRobot
+from softevo.core.robot_file import RobotFileError, parse_robot
+from softevo.core.settings import sim_settings
 
 
 def evaluate_robot_files(robot_files: Sequence[dict[str, Any]]) -> list[float | None]:

@@ -15,12 +15,12 @@ from typing import Any
 
 import numpy as np
 
-from core.config import RunConfig
-from core.evaluator import Evaluator
-from core.ga.algorithm import GeneticAlgorithm, Individual
-from core.ga.stats import CURVE_COLUMNS, GenerationStats
-from core.robot import Robot
-from core.robot_file import robot_to_json
+from softevo.core.config import RunConfig
+from softevo.core.evaluator import Evaluator
+from softevo.core.ga.algorithm import GeneticAlgorithm, Individual
+from softevo.core.ga.stats import CURVE_COLUMNS, GenerationStats
+from softevo.core.robot import Robot
+from softevo.core.robot_file import robot_to_json
 
 
 @dataclass

@@ -20,14 +20,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from core.lattice import (
+from softevo.core.lattice import (
     Lattice,
     LatticeError,
     build_lattice,
     full_lattice,
     spring_point_keys,
 )
-from core.settings import SimSettings
+from softevo.core.settings import SimSettings
 
 LABELS = ("empty", "soft", "hard", "sine", "neg_sine")
 ACTUATED_LABELS = ("sine", "neg_sine")

@@ -27,7 +27,8 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
-from core.robot import (
+from softevo.core.limits import MAX_FILE_BYTES, MAX_SIDE, MAX_VOXELS
+from softevo.core.robot import (
     GENE_BOUNDS,
     LABELS,
     Actuation,
@@ -38,14 +39,9 @@ from core.robot import (
     VoxelRobot,
     build_mechanics,
 )
-from core.settings import format_validation_error, sim_settings
+from softevo.core.settings import format_validation_error, sim_settings
 
 FORMAT = "softevo.robot/1"
-#: Largest grid side and voxel count a robot file may describe.
-MAX_SIDE = 32
-MAX_VOXELS = 4096
-#: Largest robot file read (bytes).
-MAX_FILE_BYTES = 8 * 1024 * 1024
 
 Side = Annotated[int, Field(strict=True, ge=1, le=MAX_SIDE)]
 Number = Annotated[float, Field(strict=True, allow_inf_nan=False)]

@@ -14,11 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
-from core.encodings import PAPER_CUBE_OPTIONS
-from core.physics import simulate_batch
-from core.robot import LABELS, Actuation, SpringRobot, VoxelRobot
-from core.robot_file import dump_robot
-from core.settings import sim_settings
+from softevo.core.encodings import PAPER_CUBE_OPTIONS
+from softevo.core.physics import simulate_batch
+from softevo.core.robot import LABELS, Actuation, SpringRobot, VoxelRobot
+from softevo.core.robot_file import dump_robot
+from softevo.core.settings import sim_settings
 
 HERE = Path(__file__).parent
 

@@ -1,5 +1,6 @@
-"""The `softevo` command. Each subcommand imports what it needs only when it runs, so `--help` is
-instant and a command that needs no physics never compiles any.
+"""The `softevo` command. The physics (numba) is imported only by the commands that simulate,
+when they run: `--help`, `serve` with Redis, `plot` and `db` never load it
+(tests/test_imports.py checks that in a fresh interpreter).
 
 Exit codes: 0 success, 1 bad input (one line on stderr naming the problem), 2 bad usage.
 """
@@ -32,9 +33,9 @@ def _positive_float(text: str) -> float:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from core.evaluation import warm_up
-    from core.physics import simulate
-    from core.robot_file import RobotFileError, load_robot, with_sim
+    from softevo.core.evaluation import warm_up
+    from softevo.core.physics import simulate
+    from softevo.core.robot_file import RobotFileError, load_robot, with_sim
 
     try:
         robot = load_robot(args.robot)

@@ -9,7 +9,7 @@ from typing import Any
 
 import httpx
 
-from core import figures
+from softevo.core import figures
 from softevo.results import read_results
 
 KINDS = ("all", "curve", "population", "diversity")

@@ -36,8 +36,8 @@ from typing import Any
 
 import httpx
 
-from core import figures
-from core.config import resolve
+from softevo.core import figures
+from softevo.core.config import resolve
 
 PAPER_NINE = [
     (3, 3, 6),
@@ -183,9 +183,12 @@ def service(
     if workers:
         env["SOFTEVO_WORKERS"] = str(workers)
     log = (out / "service.log").open("wb")
+    # -P: the current directory does not go first on the path, so a folder there named `softevo`
+    # (a clone, say) cannot stand in for the installed package.
     process = subprocess.Popen(
         [
             sys.executable,
+            "-P",
             "-m",
             "softevo.cli",
             "serve",
@@ -555,8 +558,8 @@ class Experiments:
 
 def breathing_cube(out: Path, quick: bool) -> dict[str, Any]:
     """The paper's phase 1: the shipped breathing cube, simulated here (one robot, no evolution)."""
-    from core.physics import simulate
-    from core.robot_file import load_robot, with_sim
+    from softevo.core.physics import simulate
+    from softevo.core.robot_file import load_robot, with_sim
 
     robot = load_robot(Path(__file__).resolve().parent.parent / "examples" / "breathing_cube.json")
     if quick:
@@ -594,8 +597,8 @@ def champions(experiments: Experiments, out: Path) -> list[dict[str, Any]]:
     this process for 1x (the fitness the run stored, as a check), 3x and 6x the run's time: a
     fitness clock of a few actuation periods can reward a transient lunge, and this shows
     which robots keep their speed."""
-    from core.physics import simulate
-    from core.robot_file import parse_robot, with_sim
+    from softevo.core.physics import simulate
+    from softevo.core.robot_file import parse_robot, with_sim
 
     rows = []
     for (experiment, variant), prefix in (

@@ -19,8 +19,8 @@ import os
 from pathlib import Path
 from typing import Any
 
-from core.evolution import CURVE_COLUMNS, Evolution
-from core.robot_file import robot_to_json
+from softevo.core.evolution import CURVE_COLUMNS, Evolution
+from softevo.core.robot_file import robot_to_json
 
 
 def summary(evolution: Evolution) -> dict[str, Any]:

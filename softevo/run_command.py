@@ -11,10 +11,9 @@ from typing import Any
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-from core import figures
-from core.config import PRESET_DESCRIPTIONS, PRESETS, ConfigError, resolve
-from core.evaluation import make_evaluator
-from core.evolution import Evolution
+from softevo.core import figures
+from softevo.core.config import PRESET_DESCRIPTIONS, PRESETS, ConfigError, resolve
+from softevo.core.evolution import Evolution
 from softevo.results import append_population, read_results, summary, write_results
 
 
@@ -72,6 +71,8 @@ def run_command(args: argparse.Namespace) -> int:
         probe.unlink()
     except OSError as error:
         args.parser.error(f"--out {out}: cannot write ({error.strerror})")
+    from softevo.core.evaluation import make_evaluator  # the physics: loaded only to run
+
     console = Console(stderr=True)
     evolution = Evolution.start(config)
     evaluator = make_evaluator(args.workers)

@@ -1,4 +1,4 @@
-"""`softevo serve` and `softevo db upgrade`: the service's commands."""
+"""`softevo serve`, `softevo worker` and `softevo db upgrade`: the service's commands."""
 
 from __future__ import annotations
 
@@ -66,7 +66,7 @@ def add_parsers(commands: Any) -> None:
 
 
 def _settings(args: argparse.Namespace) -> Any:
-    from api.settings import Settings
+    from softevo.api.settings import Settings
 
     try:
         return Settings.from_env()
@@ -79,7 +79,7 @@ def serve_command(args: argparse.Namespace) -> int:
 
     import uvicorn
 
-    from api.app import create_app
+    from softevo.api.app import create_app
 
     if not 0 < args.port < 65536:
         args.parser.error(f"--port must be between 1 and 65535, got {args.port}")
@@ -95,7 +95,7 @@ def upgrade_command(args: argparse.Namespace) -> int:
     from sqlalchemy.engine import make_url
     from sqlalchemy.exc import SQLAlchemyError
 
-    from api.db import Database, current_revision, normalise_url
+    from softevo.api.db import Database, current_revision, normalise_url
     from softevo.cli import CommandError
 
     url = args.url or _settings(args).database_url
@@ -117,8 +117,8 @@ def worker_command(args: argparse.Namespace) -> int:
     from redis.exceptions import RedisError
 
     from softevo.cli import CommandError
-    from worker.process import run_worker
-    from worker.queue import redacted
+    from softevo.worker.process import run_worker
+    from softevo.worker.queue import redacted
 
     url = args.url or _settings(args).redis_url
     if not url:

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core.robot import Mechanics
+from softevo.core.robot import Mechanics
 
 #: Smallest spring length divided by (a collapsed spring exerts no force instead of 0 / 0).
 SPRING_LENGTH_FLOOR = 1e-12

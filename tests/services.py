@@ -133,7 +133,7 @@ class Workers:
         log = (self.workdir / f"worker-{name}.log").open("wb")
         env = {**os.environ, "SOFTEVO_REDIS_URL": self.redis_url}
         process = subprocess.Popen(
-            [sys.executable, "-m", "softevo.cli", "worker", "--name", name, *extra],
+            [sys.executable, "-P", "-m", "softevo.cli", "worker", "--name", name, *extra],
             env=env,
             stdout=log,
             stderr=subprocess.STDOUT,

@@ -9,12 +9,12 @@ from pathlib import Path
 
 import pytest
 
-from core.robot_file import load_robot
+from softevo.core.robot_file import load_robot
 
 
 def softevo(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-m", "softevo.cli", *args],
+        [sys.executable, "-P", "-m", "softevo.cli", *args],
         capture_output=True,
         text=True,
         cwd=cwd,

@@ -11,11 +11,11 @@ import sys
 import time
 from pathlib import Path
 
-from core.robot_file import load_robot
+from softevo.core.robot_file import load_robot
 
 
 def softevo(*args: str) -> subprocess.CompletedProcess[str]:
-    command = [sys.executable, "-m", "softevo.cli", *args]
+    command = [sys.executable, "-P", "-m", "softevo.cli", *args]
     return subprocess.run(command, capture_output=True, text=True, timeout=600, check=False)
 
 
@@ -84,7 +84,7 @@ def test_bad_arguments_give_one_line_and_exit_2(tmp_path: Path) -> None:
 
 def test_ctrl_c_stops_cleanly_and_keeps_partial_results(tmp_path: Path) -> None:
     out = tmp_path / "interrupted"
-    command = [sys.executable, "-m", "softevo.cli", "run", "--preset", "paper-voxel",
+    command = [sys.executable, "-P", "-m", "softevo.cli", "run", "--preset", "paper-voxel",
                "--workers", "2", "--out", str(out)]  # fmt: skip
     process = subprocess.Popen(
         command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True

@@ -20,13 +20,13 @@ from typing import Any
 import numpy as np
 import pytest
 
-from core.config import resolve
-from core.evaluation import PoolEvaluator, SerialEvaluator
-from core.evaluator import Evaluator
-from core.evolution import Evolution
-from core.robot_file import robot_to_json
+from softevo.core.config import resolve
+from softevo.core.evaluation import PoolEvaluator, SerialEvaluator
+from softevo.core.evaluator import Evaluator
+from softevo.core.evolution import Evolution
+from softevo.core.robot_file import robot_to_json
+from softevo.worker.evaluator import RQEvaluator
 from tests.services import RedisServer, Workers
-from worker.evaluator import RQEvaluator
 
 SEEDS = (1, 2, 3)
 

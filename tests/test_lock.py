@@ -54,7 +54,7 @@ def declared(*, extras: tuple[str, ...] = ()) -> list[Requirement]:
 
 def readme_test_command() -> str:
     readme = (ROOT / "README.md").read_text()
-    section = readme.split("Run the tests", 1)[1]
+    section = readme.split("Run the checks and the tests", 1)[1]
     return re.search(r"```sh\n(.+?)\n```", section, re.DOTALL).group(1).strip()
 
 
@@ -95,6 +95,7 @@ def test_ci_runs_the_readme_test_command_on_the_lock() -> None:
     command = readme_test_command()
     assert command.startswith("pip install -r requirements/dev.txt && "), command
     assert "--no-deps" in command  # the project goes on top of the lock without moving it
+    assert command.endswith("&& scripts/lint.sh && python -m pytest"), command
     ci = (ROOT / ".ci" / "run").read_text()
     as_ci = command.replace("pip install", "python -m pip install")
     assert as_ci in ci, "CI does not run the README's test command"

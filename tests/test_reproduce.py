@@ -23,7 +23,8 @@ FIGURES = [
 
 def reproduce(out: Path, *flags: str) -> subprocess.CompletedProcess[str]:
     done = subprocess.run(
-        [sys.executable, "-m", "softevo.cli", "reproduce", "--quick", "--out", str(out), *flags],
+        [sys.executable, "-P", "-m", "softevo.cli", "reproduce", "--quick", "--out", str(out),
+         *flags],
         capture_output=True, text=True, timeout=300,
     )  # fmt: skip
     assert done.returncode == 0, done.stdout + done.stderr

@@ -33,8 +33,8 @@ from rq import Queue, Worker
 from rq.exceptions import NoSuchJobError
 from rq.job import Job, JobStatus
 
-from core.evaluator import BatchResult, batch_digest
-from worker.queue import JOB_FUNCTION, QUEUE, SERIALIZER, connect, result_key
+from softevo.core.evaluator import BatchResult, batch_digest
+from softevo.worker.queue import JOB_FUNCTION, QUEUE, SERIALIZER, connect, result_key
 
 log = logging.getLogger("softevo.rq")
 REDIS_DOWN = (RedisConnectionError, RedisTimeoutError, ConnectionError, OSError)

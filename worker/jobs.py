@@ -16,11 +16,11 @@ from typing import Any
 
 from rq import get_current_job
 
-from worker.queue import RESULT_TTL, result_key
+from softevo.worker.queue import RESULT_TTL, result_key
 
 
 def evaluate_batch(batch_key: str, robot_files: list[dict[str, Any]]) -> dict[str, Any]:
-    from core.evaluation import evaluate_robot_files  # loaded (and warm) in the worker
+    from softevo.core.evaluation import evaluate_robot_files  # loaded (and warm) in the worker
 
     started = time.perf_counter()
     job = get_current_job()  # the worker's name is on the job for every worker class

@@ -20,7 +20,7 @@ from redis.exceptions import ConnectionError as RedisConnectionError
 from redis.exceptions import TimeoutError as RedisTimeoutError
 from rq import Queue, SimpleWorker, Worker
 
-from worker.queue import QUEUE, SERIALIZER, connect
+from softevo.worker.queue import QUEUE, SERIALIZER, connect
 
 WORKER_CLASSES: dict[str, type[Worker]] = {"fork": Worker, "simple": SimpleWorker}
 
@@ -35,7 +35,7 @@ def run_worker(
     log_level: str = "INFO",
 ) -> bool:
     """Warm up, then work until stopped (or, with `burst`, until the queue is empty)."""
-    from core.evaluation import warm_up
+    from softevo.core.evaluation import warm_up
 
     started = time.perf_counter()
     warm_up()

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from fastapi import APIRouter, Response
 
-from api.deps import CoordinatorDep, DatabaseDep, SettingsDep
-from api.schemas import Health, Preset
-from core.config import PRESET_DESCRIPTIONS, PRESETS
+from softevo.api.deps import CoordinatorDep, DatabaseDep, SettingsDep
+from softevo.api.schemas import Health, Preset
+from softevo.core.config import PRESET_DESCRIPTIONS, PRESETS
 
 router = APIRouter(tags=["meta"])
 

@@ -9,11 +9,11 @@ from typing import Annotated, Any, Literal
 from fastapi import APIRouter, Body, Path, Query, Request, Response, status
 from fastapi.responses import StreamingResponse
 
-from api import storage
-from api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TokenDep
-from api.events import event_stream
-from api.replay import replay
-from api.schemas import (
+from softevo.api import storage
+from softevo.api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TokenDep
+from softevo.api.events import event_stream
+from softevo.api.replay import replay
+from softevo.api.schemas import (
     Curve,
     IndividualDetail,
     IndividualPage,
@@ -23,11 +23,11 @@ from api.schemas import (
     RunProgress,
     RunPublic,
 )
-from api.validation import run_config
-from core.config import RunConfig
-from core.ga.stats import CURVE_COLUMNS
-from core.genome import Genome
-from core.robot_file import robot_to_json
+from softevo.api.validation import run_config
+from softevo.core.config import RunConfig
+from softevo.core.ga.stats import CURVE_COLUMNS
+from softevo.core.genome import Genome
+from softevo.core.robot_file import robot_to_json
 
 router = APIRouter(prefix="/runs", tags=["runs"])
 RunId = Annotated[int, Path(ge=1, le=2**31 - 1, description="run id")]

@@ -7,11 +7,11 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Body, Path, Response, status
 
-from api import storage
-from api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TokenDep
-from api.routes.runs import BAD_BODY
-from api.schemas import Message, SweepBox, SweepCreate, SweepPublic
-from api.validation import RequestError, run_config
+from softevo.api import storage
+from softevo.api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TokenDep
+from softevo.api.routes.runs import BAD_BODY
+from softevo.api.schemas import Message, SweepBox, SweepCreate, SweepPublic
+from softevo.api.validation import RequestError, run_config
 
 router = APIRouter(prefix="/sweeps", tags=["sweeps"])
 SweepId = Annotated[int, Path(ge=1, le=2**31 - 1, description="sweep id")]

@@ -13,12 +13,12 @@ from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Path, Query, Response
 
-from api import storage
-from api.deps import DatabaseDep
-from api.replay import replay
-from api.routes.runs import NOT_FOUND, RunId
-from core.config import RunConfig
-from core.genome import Genome
+from softevo.api import storage
+from softevo.api.deps import DatabaseDep
+from softevo.api.replay import replay
+from softevo.api.routes.runs import NOT_FOUND, RunId
+from softevo.core.config import RunConfig
+from softevo.core.genome import Genome
 
 router = APIRouter(prefix="/runs", tags=["runs"])
 
@@ -58,7 +58,7 @@ def get_figure(
     run_id: RunId, kind: Literal["curve", "population", "diversity"], db: DatabaseDep
 ) -> Response:
     """The learning curve, population dot plot or diversity chart as a publication PNG."""
-    from core import figures
+    from softevo.core import figures
 
     run = storage.get_run(db, run_id)
     items = storage.list_individuals(db, run, None, 0, 10**9)[0] if kind == "population" else []

@@ -32,10 +32,10 @@ from typing import Any, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from core.encodings import Encoding
-from core.ga import operators
-from core.ga.stats import GenerationStats, generation_stats
-from core.genome import Genome
+from softevo.core.encodings import Encoding
+from softevo.core.ga import operators
+from softevo.core.ga.stats import GenerationStats, generation_stats
+from softevo.core.genome import Genome
 
 
 class GAConfig(BaseModel):

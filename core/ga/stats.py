@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from core.genome import Genome
+from softevo.core.genome import Genome
 
 #: The learning-curve columns of the public contract, in order.
 CURVE_COLUMNS = (

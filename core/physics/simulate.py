@@ -16,9 +16,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core.physics import kernels
-from core.robot import Mechanics, Robot, build_mechanics
-from core.settings import SimSettings
+from softevo.core.physics import kernels
+from softevo.core.robot import Mechanics, Robot, build_mechanics
+from softevo.core.settings import SimSettings
 
 #: Robots per `simulate_many` call. 8 doubles fill one AVX-512 vector, and a batch of 8 solid
 #: 4x4x4 robots keeps its arrays in a 1 MB L2 cache: 4 to 8 measured fastest, 32 about 30 %

@@ -14,10 +14,10 @@ from pathlib import Path
 import pytest
 from fastapi.testclient import TestClient
 
-from api.app import create_app
-from api.db import Database, scratch_postgres
-from api.settings import Settings
-from core.evaluation import SerialEvaluator
+from softevo.api.app import create_app
+from softevo.api.db import Database, scratch_postgres
+from softevo.api.settings import Settings
+from softevo.core.evaluation import SerialEvaluator
 
 POSTGRES = os.environ.get("SOFTEVO_TEST_POSTGRES", "postgresql://postgres@127.0.0.1:5432/test")
 

@@ -92,19 +92,19 @@ def test_replays_are_bounded_and_remembered(
 ) -> None:
     """A replay is simulated on a GET, so its frames are capped (fps lowered to fit, and said)
     and a repeated request is served from memory, not simulated again."""
-    import api.replay
+    from softevo.api import replay
 
     run_id = start(client)
     wait_for(client, run_id, ("completed",))
     simulated: list[float] = []
-    real = api.replay._simulate
+    real = replay._simulate
     monkeypatch.setattr(
-        api.replay,
+        replay,
         "_simulate",
         lambda *a: simulated.append(a[1]) or real(*a),  # type: ignore[func-returns-value]
     )
-    monkeypatch.setattr(api.replay, "_cache", type(api.replay._cache)())
-    monkeypatch.setattr(api.replay, "MAX_POSITIONS", 2000)
+    monkeypatch.setattr(replay, "_cache", type(replay._cache)())
+    monkeypatch.setattr(replay, "MAX_POSITIONS", 2000)
     capped = client.get(f"/runs/{run_id}/best/replay", params={"fps": 120}).json()
     masses = len(capped["frames"][0])
     assert len(capped["frames"]) * masses <= 2000 + masses
@@ -112,8 +112,8 @@ def test_replays_are_bounded_and_remembered(
     assert capped["times"][1] == pytest.approx(1 / capped["fps"])
     again = client.get(f"/runs/{run_id}/best/replay", params={"fps": 120}).json()
     assert again == capped and len(simulated) == 1
-    monkeypatch.setattr(api.replay, "MAX_POSITIONS", 10**9)  # another server's setting:
-    api.replay._cache.clear()  # its replays are its own
+    monkeypatch.setattr(replay, "MAX_POSITIONS", 10**9)  # another server's setting:
+    replay._cache.clear()  # its replays are its own
     full = client.get(f"/runs/{run_id}/best/replay", params={"fps": 120}).json()
     assert full["fps"] == pytest.approx(120, rel=0.05) and len(simulated) == 2
     assert full["speed"] == capped["speed"]  # the same simulation, only recorded more often

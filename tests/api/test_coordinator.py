@@ -16,13 +16,13 @@ from alembic.migration import MigrationContext
 from sqlalchemy import func, select
 from sqlalchemy.exc import IntegrityError
 
-from api import leases, storage
-from api.coordinator import Coordinator
-from api.db import Database
-from api.models import Base, Individual
-from core.config import resolve
-from core.evaluation import SerialEvaluator
-from core.evolution import Evolution
+from softevo.api import leases, storage
+from softevo.api.coordinator import Coordinator
+from softevo.api.db import Database
+from softevo.api.models import Base, Individual
+from softevo.core.config import resolve
+from softevo.core.evaluation import SerialEvaluator
+from softevo.core.evolution import Evolution
 
 REQUEST = {"preset": "quick", "seed": 5, "population": 8, "generations": 4}
 

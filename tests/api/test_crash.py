@@ -21,10 +21,10 @@ import httpx
 import pytest
 from sqlalchemy import Engine, create_engine, text
 
-from api.db import Database, normalise_url
-from core.config import resolve
-from core.evaluation import SerialEvaluator
-from core.evolution import CURVE_COLUMNS, Evolution
+from softevo.api.db import Database, normalise_url
+from softevo.core.config import resolve
+from softevo.core.evaluation import SerialEvaluator
+from softevo.core.evolution import CURVE_COLUMNS, Evolution
 
 #: 3x3x3 robots simulated for 20 s: a batch of two takes ~0.2 s, so a generation (about eight new
 #: robots, four batches) lasts long enough to be caught between its first and last batch.
@@ -89,7 +89,7 @@ def serve(database_url: str, log: Path) -> Server:
     port = _free_port()
     with log.open("wb") as out:
         process = subprocess.Popen(
-            [sys.executable, "-m", "softevo.cli", "serve", "--port", str(port)],
+            [sys.executable, "-P", "-m", "softevo.cli", "serve", "--port", str(port)],
             env=env,
             stdout=out,
             stderr=subprocess.STDOUT,

@@ -18,12 +18,12 @@ from fastapi.testclient import TestClient
 from sqlalchemy import create_engine, text
 from sqlalchemy.engine import make_url
 
-from api.app import create_app
-from api.db import Database
-from api.settings import Settings
-from core.config import resolve
-from core.evaluation import SerialEvaluator
-from core.evolution import CURVE_COLUMNS, Evolution
+from softevo.api.app import create_app
+from softevo.api.db import Database
+from softevo.api.settings import Settings
+from softevo.core.config import resolve
+from softevo.core.evaluation import SerialEvaluator
+from softevo.core.evolution import CURVE_COLUMNS, Evolution
 from tests.services import PostgresServer, TcpProxy
 
 pytestmark = [pytest.mark.postgres, pytest.mark.slow, pytest.mark.fault]

@@ -16,12 +16,12 @@ from typing import Any
 import pytest
 from fastapi.testclient import TestClient
 
-from api import storage
-from api.db import Database
-from api.settings import Limits
-from core.config import resolve
-from core.evaluation import SerialEvaluator
-from core.evolution import CURVE_COLUMNS, Evolution
+from softevo.api import storage
+from softevo.api.db import Database
+from softevo.api.settings import Limits
+from softevo.core.config import resolve
+from softevo.core.evaluation import SerialEvaluator
+from softevo.core.evolution import CURVE_COLUMNS, Evolution
 
 SMALL = {"preset": "quick", "seed": 1, "population": 6, "generations": 3}
 JSON = {"content-type": "application/json"}

@@ -29,9 +29,9 @@ from hypothesis import HealthCheck, settings
 from schemathesis.checks import ignored_auth, missing_required_header, positive_data_acceptance
 from schemathesis.python import asgi
 
-from api.app import create_app
-from api.settings import Limits, Settings
-from core.evaluation import SerialEvaluator
+from softevo.api.app import create_app
+from softevo.api.settings import Limits, Settings
+from softevo.core.evaluation import SerialEvaluator
 
 pytestmark = pytest.mark.slow
 

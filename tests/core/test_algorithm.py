@@ -9,9 +9,9 @@ import math
 import numpy as np
 import pytest
 
-from core.config import resolve
-from core.encodings import make_encoding
-from core.ga.algorithm import GAConfig, GAState, GeneticAlgorithm
+from softevo.core.config import resolve
+from softevo.core.encodings import make_encoding
+from softevo.core.ga.algorithm import GAConfig, GAState, GeneticAlgorithm
 
 
 def toy_fitness(individuals: list) -> np.ndarray:

@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from core.config import ConfigError, resolve
-from core.ga.algorithm import GAState, GeneticAlgorithm
+from softevo.core.config import ConfigError, resolve
+from softevo.core.ga.algorithm import GAState, GeneticAlgorithm
 from tests.core.test_algorithm import make, run, toy_fitness
 
 

@@ -9,11 +9,11 @@ import sys
 import numpy as np
 import pytest
 
-from core.encodings import EncodingError, make_encoding
-from core.genome import Genome
-from core.physics import simulate
-from core.robot_file import parse_robot, robot_to_json
-from core.settings import sim_settings
+from softevo.core.encodings import EncodingError, make_encoding
+from softevo.core.genome import Genome
+from softevo.core.physics import simulate
+from softevo.core.robot_file import parse_robot, robot_to_json
+from softevo.core.settings import sim_settings
 
 SIM = sim_settings({"duration": 0.2, "settle_time": 0.1})
 

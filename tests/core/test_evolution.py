@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from core.config import resolve
-from core.evaluation import PoolEvaluator, SerialEvaluator
-from core.evolution import Evolution
-from core.robot_file import robot_to_json
+from softevo.core.config import resolve
+from softevo.core.evaluation import PoolEvaluator, SerialEvaluator
+from softevo.core.evolution import Evolution
+from softevo.core.robot_file import robot_to_json
 
 SMALL = {"preset": "quick", "generations": 6, "population": 10}
 

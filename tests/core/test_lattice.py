@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from core.lattice import LatticeError, build_lattice, full_lattice, voxel_index
+from softevo.core.lattice import LatticeError, build_lattice, full_lattice, voxel_index
 
 
 def lattice_of(shape: tuple[int, int, int], filled_voxels: list[tuple[int, int, int]]):

@@ -8,7 +8,7 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
-from core.ga import operators
+from softevo.core.ga import operators
 
 seeds = st.integers(0, 2**32 - 1)
 

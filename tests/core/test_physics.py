@@ -32,9 +32,9 @@ import textwrap
 import numpy as np
 import pytest
 
-from core.lattice import full_lattice
-from core.physics import simulate, simulate_batch
-from core.robot import (
+from softevo.core.lattice import full_lattice
+from softevo.core.physics import simulate, simulate_batch
+from softevo.core.robot import (
     SPRING_LABELS,
     Actuation,
     LabelledSpringRobot,
@@ -43,7 +43,7 @@ from core.robot import (
     VoxelRobot,
     build_mechanics,
 )
-from core.settings import SimSettings, sim_settings
+from softevo.core.settings import SimSettings, sim_settings
 from tests import reference_physics as reference
 from tests.conftest import ROOT
 
@@ -307,9 +307,9 @@ def test_mirror_symmetric_robot_does_not_drift_sideways() -> None:
 DETERMINISM_SCRIPT = textwrap.dedent(
     """
     import hashlib
-    from core.physics import simulate
-    from core.robot import Actuation, VoxelRobot
-    from core.settings import SimSettings, sim_settings
+    from softevo.core.physics import simulate
+    from softevo.core.robot import Actuation, VoxelRobot
+    from softevo.core.settings import SimSettings, sim_settings
 
     sim = sim_settings({"duration": 1.0, "settle_time": 0.25, "omega": 4.0})
     labels = ("sine", "neg_sine", "hard", "soft", "sine", "empty", "hard", "neg_sine")
@@ -442,9 +442,9 @@ def test_a_robot_whose_integration_diverged_is_unstable_not_fast() -> None:
     some to NaN, some to huge but finite positions, which once read as speeds of 1e70 m/s and
     won the run. Every such robot is unstable with a NaN speed; a robot at the paper's dt is
     stable, its springs nowhere near the stretch limit."""
-    from core.config import resolve
-    from core.evolution import Evolution
-    from core.physics.simulate import MAX_STRETCH
+    from softevo.core.config import resolve
+    from softevo.core.evolution import Evolution
+    from softevo.core.physics.simulate import MAX_STRETCH
 
     request = {"preset": "quick", "seed": 4, "population": 16, "generations": 1}
     for dt, diverges in ((0.003, True), (0.0005, False)):

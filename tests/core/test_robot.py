@@ -11,8 +11,8 @@ import math
 import numpy as np
 import pytest
 
-from core.lattice import full_lattice
-from core.robot import (
+from softevo.core.lattice import full_lattice
+from softevo.core.robot import (
     Actuation,
     LabelledSpringRobot,
     RobotError,
@@ -20,7 +20,7 @@ from core.robot import (
     VoxelRobot,
     build_mechanics,
 )
-from core.settings import sim_settings
+from softevo.core.settings import sim_settings
 
 SIM = sim_settings({"edge_length": 0.5, "drop_height": 0.2, "omega": 3.0})
 HARD, SOFT, ACT = SIM.hard_stiffness, SIM.soft_stiffness, SIM.actuated_stiffness

@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from core.robot import SpringRobot, VoxelRobot
-from core.robot_file import (
+from softevo.core.robot import SpringRobot, VoxelRobot
+from softevo.core.robot_file import (
     RobotFileError,
     load_robot,
     parse_robot,

@@ -7,7 +7,7 @@ import math
 import pytest
 from pydantic import ValidationError
 
-from core.settings import SimSettings, format_validation_error, sim_settings
+from softevo.core.settings import SimSettings, format_validation_error, sim_settings
 
 
 def test_defaults_follow_the_paper() -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from core.evaluator import split_evenly
+from softevo.core.evaluator import split_evenly
 
 
 @pytest.mark.parametrize("n", range(0, 30))

@@ -32,7 +32,7 @@ def serve(folder: Path, token: str | None = None) -> Iterator[httpx.Client]:
         env["SOFTEVO_API_TOKEN"] = token
     log = (folder / "server.log").open("wb")
     process = subprocess.Popen(
-        [sys.executable, "-m", "softevo.cli", "serve", "--port", str(port)],
+        [sys.executable, "-P", "-m", "softevo.cli", "serve", "--port", str(port)],
         env=env,
         stdout=log,
         stderr=subprocess.STDOUT,

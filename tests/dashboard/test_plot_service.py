@@ -44,7 +44,16 @@ def test_plot_a_run_of_the_service(tmp_path: Path) -> None:
 
         def plot(*args: str) -> subprocess.CompletedProcess[str]:
             return subprocess.run(
-                [sys.executable, "-m", "softevo.cli", "plot", *args, "--url", str(server.base_url)],
+                [
+                    sys.executable,
+                    "-P",
+                    "-m",
+                    "softevo.cli",
+                    "plot",
+                    *args,
+                    "--url",
+                    str(server.base_url),
+                ],
                 capture_output=True,
                 text=True,
                 env=env,

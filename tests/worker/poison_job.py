@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from worker.jobs import evaluate_batch as real_evaluate_batch
-from worker.jobs import push_result
+from softevo.worker.jobs import evaluate_batch as real_evaluate_batch
+from softevo.worker.jobs import push_result
 
 
 def evaluate_batch(batch_key: str, robot_files: list[dict[str, Any]]) -> dict[str, Any]:

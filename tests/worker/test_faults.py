@@ -35,15 +35,15 @@ from rq.exceptions import NoSuchJobError
 from rq.job import Job, JobStatus
 from rq.registry import StartedJobRegistry
 
-from api.app import create_app
-from api.settings import Settings
-from core.config import resolve
-from core.evaluation import SerialEvaluator
-from core.evolution import CURVE_COLUMNS, Evolution
-from core.robot_file import robot_to_json
+from softevo.api.app import create_app
+from softevo.api.settings import Settings
+from softevo.core.config import resolve
+from softevo.core.evaluation import SerialEvaluator
+from softevo.core.evolution import CURVE_COLUMNS, Evolution
+from softevo.core.robot_file import robot_to_json
+from softevo.worker.evaluator import RQEvaluator
+from softevo.worker.queue import QUEUE, SERIALIZER, result_key
 from tests.services import RedisServer, Workers
-from worker.evaluator import RQEvaluator
-from worker.queue import QUEUE, SERIALIZER, result_key
 
 pytestmark = [pytest.mark.redis, pytest.mark.slow, pytest.mark.fault]
 
@@ -691,7 +691,7 @@ def test_results_are_plain_json_and_garbage_on_the_result_list_is_ignored(
         wait_until(lambda: redis.exists(job_key) == 1, 10, "the job enqueued")
         stored = zlib.decompress(redis.hget(job_key, "data"))  # RQ compresses the job's data
         function, _instance, args, _kwargs = json.loads(stored)
-        assert function == "worker.jobs.evaluate_batch" and args == ["garbage", files]
+        assert function == "softevo.worker.jobs.evaluate_batch" and args == ["garbage", files]
         start_workers(workers, "g1")
         thread.join(30)
         assert not thread.is_alive()

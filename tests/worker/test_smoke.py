@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from core.config import resolve
-from core.evaluation import SerialEvaluator
-from core.evolution import Evolution
-from core.robot_file import robot_to_json
-from worker.evaluator import RQEvaluator
+from softevo.core.config import resolve
+from softevo.core.evaluation import SerialEvaluator
+from softevo.core.evolution import Evolution
+from softevo.core.robot_file import robot_to_json
+from softevo.worker.evaluator import RQEvaluator
 
 pytestmark = pytest.mark.redis
 
@@ -33,8 +33,8 @@ def test_rq_evaluator_matches_the_serial_one(redis_server, workers, worker_class
 API_ON_RQ = """
 import sys, time
 from fastapi.testclient import TestClient
-from api.app import create_app
-from api.settings import Settings
+from softevo.api.app import create_app
+from softevo.api.settings import Settings
 database, redis = "sqlite:///" + sys.argv[1], sys.argv[2]
 settings = Settings(database_url=database, redis_url=redis, poll_seconds=0.05)
 with TestClient(create_app(settings)) as client:

@@ -1,0 +1,16 @@
+"""Every fixed ceiling of softevo in one place, read by every layer: run configs, robot files,
+the service's settings and its defaults. (Operators lower the service's own ceilings with
+`SOFTEVO_*` variables: `softevo.api.settings.Limits`; these are the bounds around them.)"""
+
+from __future__ import annotations
+
+#: Largest bounding-box side and voxel count of any robot, evolved or read from a file.
+MAX_SIDE = 32
+MAX_VOXELS = 4096
+#: Largest robot file read (bytes).
+MAX_FILE_BYTES = 8 * 1024 * 1024
+#: The service's default ceiling on one run's voxels (SOFTEVO_MAX_VOXELS; at most MAX_VOXELS).
+SERVICE_MAX_VOXELS = 512
+#: Robots per evaluator call in the service by default (SOFTEVO_BATCH_SIZE): fitness is saved
+#: batch by batch, and the local pool cuts no chunk smaller than this.
+BATCH_SIZE = 4

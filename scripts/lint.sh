@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# The checks CI runs before the tests: ruff (lint and format) and import-linter's contracts
+# (pyproject.toml). The contracts are checked on the tree as installed, `softevo.core` and all
+# (the repository keeps core/, api/, worker/ and migrations/ at its top; pyproject maps them
+# under softevo), so the folders are staged that way first: grimp reads folders, not mappings.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root=$PWD
+python -m ruff check .
+python -m ruff format --check .
+stage=$(mktemp -d)
+trap 'rm -rf "$stage"' EXIT
+cp -r softevo "$stage/softevo"
+for folder in core api worker migrations; do
+  cp -r "$folder" "$stage/softevo/$folder"
+done
+# lint-imports, called through the interpreter (its console script may not be on PATH yet)
+(cd "$stage" && python -c 'import sys; from importlinter.cli import lint_imports_command as c
+sys.argv[0] = "lint-imports"; c()' --config "$root/pyproject.toml" --no-cache)
