@@ -22,7 +22,7 @@ from fastapi.responses import JSONResponse
 from sqlalchemy.exc import InterfaceError, OperationalError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
-from softevo.api import dashboard, storage
+from softevo.api import dashboard, store
 from softevo.api.body_limit import BodyLimitMiddleware
 from softevo.api.coordinator import Coordinator
 from softevo.api.db import Database, alembic_config, current_revision
@@ -53,10 +53,10 @@ def default_evaluator(settings: Settings) -> Evaluator:
     if settings.redis_url:
         from softevo.worker.evaluator import RQEvaluator
 
-        return RQEvaluator(settings.redis_url, concurrency=settings.queued_batches)
+        return RQEvaluator(settings.redis_url)
     from softevo.core.evaluation import make_evaluator
 
-    return make_evaluator(settings.workers, min_chunk=settings.batch_size)
+    return make_evaluator(settings.workers)
 
 
 def create_app(
@@ -78,6 +78,7 @@ def create_app(
             evaluator,
             max_running=settings.max_running,
             batch_size=settings.batch_size,
+            in_flight=settings.queued_batches,
             lease_seconds=settings.lease_seconds,
             poll_seconds=settings.poll_seconds,
         )
@@ -111,16 +112,16 @@ def create_app(
 
 
 def _install_error_handlers(app: FastAPI) -> None:
-    @app.exception_handler(storage.NotFoundError)
-    async def not_found(_request: Request, error: storage.NotFoundError) -> JSONResponse:
+    @app.exception_handler(store.NotFoundError)
+    async def not_found(_request: Request, error: store.NotFoundError) -> JSONResponse:
         return JSONResponse({"detail": str(error)}, status_code=404)
 
-    @app.exception_handler(storage.ConflictError)
-    async def conflict(_request: Request, error: storage.ConflictError) -> JSONResponse:
+    @app.exception_handler(store.ConflictError)
+    async def conflict(_request: Request, error: store.ConflictError) -> JSONResponse:
         return JSONResponse({"detail": str(error)}, status_code=409)
 
-    @app.exception_handler(storage.QueueFullError)
-    async def queue_full(_request: Request, error: storage.QueueFullError) -> JSONResponse:
+    @app.exception_handler(store.QueueFullError)
+    async def queue_full(_request: Request, error: store.QueueFullError) -> JSONResponse:
         return JSONResponse({"detail": str(error)}, status_code=429, headers={"Retry-After": "30"})
 
     @app.exception_handler(RequestError)

@@ -12,7 +12,7 @@ from typing import Any
 from fastapi import Request
 from starlette.concurrency import run_in_threadpool
 
-from softevo.api import storage
+from softevo.api import store
 from softevo.api.db import Database
 
 POLL_SECONDS = 0.25
@@ -30,13 +30,13 @@ async def event_stream(
     db: Database,
     run_id: int,
     after: int,
-    public: Callable[[storage.RunRecord], Any],
+    public: Callable[[store.RunRecord], Any],
 ) -> AsyncIterator[str]:
     last_status = None
     idle = 0.0
     while True:
-        run = await run_in_threadpool(storage.get_run, db, run_id)
-        rows = await run_in_threadpool(storage.curve, db, run_id)
+        run = await run_in_threadpool(store.get_run, db, run_id)
+        rows = await run_in_threadpool(store.curve, db, run_id)
         for row in rows:
             if row["generation"] > after:
                 after = row["generation"]

@@ -14,6 +14,7 @@ import threading
 from collections import OrderedDict
 from typing import Any
 
+from softevo.core.nulls import to_null
 from softevo.core.robot import build_mechanics
 from softevo.core.robot_file import robot_to_json
 
@@ -70,7 +71,7 @@ def _simulate(robot: Any, fps: float) -> dict[str, Any]:
     result, trajectory = simulate(mechanics, record_every=every)
     assert trajectory is not None
     return {
-        "speed": result.speed if math.isfinite(result.speed) else None,
+        "speed": to_null(result.speed),
         "fps": 1.0 / (every * robot.sim.dt),
         "robot": robot_to_json(robot),
         **trajectory.to_json(),

@@ -11,7 +11,7 @@ import os
 from dataclasses import dataclass, field, fields
 from functools import lru_cache
 
-from softevo.core.limits import BATCH_SIZE, MAX_VOXELS, SERVICE_MAX_VOXELS
+from softevo.core.limits import BATCH_SIZE, IN_FLIGHT, MAX_VOXELS, SERVICE_MAX_VOXELS
 
 DEFAULT_DATABASE_URL = "sqlite:///softevo.db"
 
@@ -41,7 +41,7 @@ class Settings:
     max_running: int = 2  # runs driven at once by this process; the rest wait, queued
     workers: int | None = None  # in-process pool size (default: one per core)
     batch_size: int = BATCH_SIZE  # robots per evaluator call; fitness is saved batch by batch
-    queued_batches: int = 64  # with RQ: batches of one run in flight at once
+    queued_batches: int = IN_FLIGHT  # batches of one run in flight at once
     lease_seconds: float = 15.0  # a coordinator that stops heartbeating loses its runs after this
     poll_seconds: float = 0.5  # how often the scheduler looks for queued or orphaned runs
     limits: Limits = field(default_factory=Limits)

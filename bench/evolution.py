@@ -10,6 +10,7 @@ individuals whose fitness came from the hash cache.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import platform
 import time
@@ -18,16 +19,19 @@ import numpy as np
 
 from softevo.core.config import resolve
 from softevo.core.evaluation import PoolEvaluator, SerialEvaluator
+from softevo.core.evaluator import evaluate_in_batches
 from softevo.core.evolution import Evolution
 from softevo.core.robot_file import robot_to_json
 
 
 def evaluations_per_second(files: list[dict], evaluator, repeats: int) -> tuple[float, np.ndarray]:
-    evaluator.evaluate(files[:2])  # warm: every process has loaded its kernels
+    # about two batches per process, as the generation step cuts a large generation
+    size = max(1, math.ceil(len(files) / (2 * evaluator.capacity())))
+    evaluate_in_batches(evaluator, files[:2], batch_size=1)  # warm: every process has its kernels
     times, result = [], None
     for _ in range(repeats):
         started = time.perf_counter()
-        result = evaluator.evaluate(files)
+        result = evaluate_in_batches(evaluator, files, batch_size=size)
         times.append(time.perf_counter() - started)
     return len(files) / float(np.median(times)), result
 

@@ -11,7 +11,7 @@ robots for the service, then drives them from this process through `worker.evalu
 * `pool/simple` and `pool/fork`: RQ's `rq.worker_pool.WorkerPool` in one process that loads the
   kernels first (`core.evaluation.warm_up`) and then forks its N workers (`SimpleWorker`s or
   forking `Worker`s), so they start warm;
-* `PoolEvaluator`: the in-process baseline, `core.evaluation.PoolEvaluator(n, min_chunk=batch)`
+* `PoolEvaluator`: the in-process baseline, `softevo.core.evaluation.PoolEvaluator(n)`
   with n batches in flight (the service's local path). Batches go to its process pool as the job
   function `worker.jobs.evaluate_batch`, which times itself like on an RQ worker.
 
@@ -331,7 +331,7 @@ def rq_call(evaluator: RQEvaluator) -> Call:
 
 
 def pool_call(pool: PoolEvaluator) -> Call:
-    # The pool's own executor (what `PoolEvaluator.evaluate` submits a one-chunk batch to), given
+    # The pool's own executor (what `PoolEvaluator.evaluate_batch` submits a batch to), given
     # the RQ job function so the worker side times itself exactly as an RQ worker does.
     def call(files: list[dict[str, Any]], key: str) -> tuple[np.ndarray, float]:
         payload = pool._pool.submit(evaluate_batch, key, files).result()
@@ -371,10 +371,11 @@ def main() -> None:
     paper = Evolution.start(resolve({"preset": "paper-voxel", "seed": 1}))
     quick = Evolution.start(resolve({"preset": "quick", "seed": 1}))
     robot_sets = {
-        "paper-voxel": [robot_to_json(paper.robot(item)) for item in paper.algorithm.ask()],
-        "quick": [robot_to_json(quick.robot(item)) for item in quick.algorithm.ask()],
+        "paper-voxel": [robot_to_json(paper.robot(item)) for item in paper.individuals()],
+        "quick": [robot_to_json(quick.robot(item)) for item in quick.individuals()],
     }
-    references = {name: SerialEvaluator().evaluate(files) for name, files in robot_sets.items()}
+    serial = SerialEvaluator()
+    references = {name: serial.evaluate_batch(files).fitness for name, files in robot_sets.items()}
     tiny = robot_to_json(
         VoxelRobot((1, 1, 1), ("hard",), sim=sim_settings({"duration": 0.01, "settle_time": 0}))
     )
@@ -421,11 +422,11 @@ def main() -> None:
             for kind in kinds:
                 if kind == "local":
                     for n in (1, 2):
-                        with PoolEvaluator(n, min_chunk=4) as pool:
+                        with PoolEvaluator(n) as pool:
                             measure(kind, pool_call(pool), n, threads=n)
                     continue
                 workers = Workers(kind, url, workdir)
-                evaluator = RQEvaluator(url, concurrency=64)
+                evaluator = RQEvaluator(url)
                 try:
                     for n in (1, 2):
                         workers.scale(n)

@@ -61,7 +61,7 @@ from rq import Worker
 from softevo.api.settings import Settings
 from softevo.core.config import resolve
 from softevo.core.evaluation import PoolEvaluator
-from softevo.core.evaluator import split_evenly
+from softevo.core.evaluator import evaluate_in_batches, split_evenly
 from softevo.core.evolution import Evolution
 from softevo.core.ga.stats import CURVE_COLUMNS
 from softevo.core.robot import VoxelRobot
@@ -367,7 +367,8 @@ class EvolutionPath:
         tiny = robot_to_json(
             VoxelRobot((1, 1, 1), ("hard",), sim=sim_settings({"duration": 0.01, "settle_time": 0}))
         )
-        self.pool.evaluate([tiny] * 4)  # untimed: both pool processes started and warm
+        # untimed: both pool processes started and warm
+        evaluate_in_batches(self.pool, [tiny] * 4, batch_size=1)
 
     def close(self) -> None:
         self.pool.close()

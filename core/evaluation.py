@@ -1,6 +1,7 @@
 """The in-process evaluators (serial, local process pool) and the job function every backend runs.
 
-The interface is `core.evaluator.Evaluator`; RQ workers (`worker/`) are the other backend. Payloads
+The interface is `softevo.core.evaluator.Evaluator`; RQ workers (`softevo.worker`) are the other
+backend. Payloads
 are plain data (robot-file dicts, `softevo.robot/1`), never live objects, and a robot's fitness
 does not depend on which batch, process or machine simulated it (the kernels are bit-identical
 across batches), so every backend gives the same learning curve.
@@ -10,14 +11,12 @@ A robot that cannot be built or whose simulation blows up has fitness NaN: faile
 
 from __future__ import annotations
 
-import itertools
-import math
 import multiprocessing
 import os
 import socket
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
@@ -25,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from softevo.core.evaluator import BatchResult, Evaluator
+from softevo.core.nulls import from_nulls, to_null
 from softevo.core.physics import simulate, simulate_batch
 from softevo.core.robot import Robot, VoxelRobot
 from softevo.core.robot_file import RobotFileError, parse_robot
@@ -41,42 +41,26 @@ def evaluate_robot_files(robot_files: Sequence[dict[str, Any]]) -> list[float | 
             robots.append(None)
     built = [robot for robot in robots if robot is not None]
     speeds = iter(result.speed for result in simulate_batch(built)) if built else iter(())
-    return [None if robot is None else _finite_or_none(next(speeds)) for robot in robots]
+    return [None if robot is None else to_null(next(speeds)) for robot in robots]
 
 
-def _finite_or_none(value: float) -> float | None:
-    return value if math.isfinite(value) else None
+def _timed(name: str, evaluate: Callable[[], np.ndarray]) -> BatchResult:
+    started = time.perf_counter()
+    fitness = evaluate()
+    return BatchResult(fitness, f"{name}@{socket.gethostname()}", time.perf_counter() - started)
 
 
-def _to_array(values: Sequence[float | None]) -> np.ndarray:
-    return np.array([math.nan if v is None else v for v in values], dtype=np.float64)
-
-
-class _Timed:
-    """`evaluate_batch` for the in-process backends: `evaluate`, timed, named by host."""
-
-    def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray:
-        raise NotImplementedError
+class SerialEvaluator(Evaluator):
+    """Everything in the calling process, one batch at a time."""
 
     def evaluate_batch(
         self, robot_files: Sequence[dict[str, Any]], key: str | None = None
     ) -> BatchResult:
-        started = time.perf_counter()
-        fitness = self.evaluate(robot_files)
-        name = f"{type(self).__name__}@{socket.gethostname()}"
-        return BatchResult(fitness, name, time.perf_counter() - started)
+        files = list(robot_files)
+        return _timed("SerialEvaluator", lambda: from_nulls(evaluate_robot_files(files)))
 
-
-class SerialEvaluator(_Timed):
-    """Everything in the calling process, one batch at a time."""
-
-    concurrency = 1
-
-    def workers(self) -> int:
+    def capacity(self) -> int:
         return 1
-
-    def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray:
-        return _to_array(evaluate_robot_files(list(robot_files)))
 
     def close(self) -> None:
         pass
@@ -89,18 +73,13 @@ def warm_up() -> None:
     simulate(robot)
 
 
-class PoolEvaluator(_Timed):
-    """A local pool of worker processes (default: one per core), each warmed up once.
+class PoolEvaluator(Evaluator):
+    """A local pool of worker processes (default: one per core), each warmed up once. A batch
+    runs in one process, across the kernel's SIMD lanes; the generation step cuts a generation
+    into at least `capacity()` batches and keeps them in flight together, one per process."""
 
-    A batch is cut into contiguous chunks, about two per process so a slow chunk does not leave
-    a core idle, but none smaller than `min_chunk` robots, so a small batch stays one batch
-    across the kernel's SIMD lanes in one process; results come back in input order.
-    """
-
-    def __init__(self, processes: int | None = None, min_chunk: int = 1) -> None:
+    def __init__(self, processes: int | None = None) -> None:
         self.processes = processes or os.cpu_count() or 1
-        self.concurrency = self.processes
-        self.min_chunk = max(1, min_chunk)
         if self.processes < 1:
             raise ValueError(f"processes must be >= 1, got {self.processes}")
         self._lock = threading.Lock()
@@ -113,20 +92,21 @@ class PoolEvaluator(_Timed):
             initializer=warm_up,
         )
 
-    def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray:
+    def evaluate_batch(
+        self, robot_files: Sequence[dict[str, Any]], key: str | None = None
+    ) -> BatchResult:
         """Thread-safe. If a pool process dies (killed, out of memory), the pool is rebuilt and
         the batch tried once more; a batch that kills its process twice raises."""
         files = list(robot_files)
+        return _timed("PoolEvaluator", lambda: self._run(files))
+
+    def _run(self, files: list[dict[str, Any]]) -> np.ndarray:
         if not files:
             return np.empty(0)
-        n_chunks = min(2 * self.processes, math.ceil(len(files) / self.min_chunk))
-        bounds = np.linspace(0, len(files), n_chunks + 1).round().astype(int)
-        chunks = [files[start:stop] for start, stop in itertools.pairwise(bounds)]
         for attempt in (1, 2):
             pool = self._pool
             try:
-                results = list(pool.map(evaluate_robot_files, chunks))
-                return _to_array([value for chunk in results for value in chunk])
+                return from_nulls(pool.submit(evaluate_robot_files, files).result())
             except BrokenProcessPool:
                 if attempt == 2:
                     raise
@@ -136,21 +116,15 @@ class PoolEvaluator(_Timed):
                         self._pool = self._new_pool()
         raise AssertionError("unreachable")
 
-    def workers(self) -> int:
+    def capacity(self) -> int:
         return self.processes
 
     def close(self) -> None:
         self._pool.shutdown(wait=True, cancel_futures=True)
 
-    def __enter__(self) -> PoolEvaluator:
-        return self
 
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-
-def make_evaluator(processes: int | None = None, min_chunk: int = 1) -> Evaluator:
+def make_evaluator(processes: int | None = None) -> Evaluator:
     """The in-process default: serial for one process, otherwise a local pool."""
     if processes == 1:
         return SerialEvaluator()
-    return PoolEvaluator(processes, min_chunk)
+    return PoolEvaluator(processes)

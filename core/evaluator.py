@@ -1,10 +1,10 @@
 """The evaluator interface, apart from its backends so that importing it loads no physics.
 
-The genetic algorithm and the coordinator only see `Evaluator`: robot files in (plain
+The generation step (`softevo.core.generation`) only sees `Evaluator`: robot files in (plain
 `softevo.robot/1` dicts), speeds out (m/s; NaN for a robot that failed, never 0). Backends: the
-in-process serial evaluator and local process pool (`core.evaluation`), and RQ workers on Redis
-(`worker.evaluator`). A robot's fitness does not depend on which backend, process or batch
-simulated it, so every backend gives the same learning curve.
+in-process serial evaluator and local process pool (`softevo.core.evaluation`), and RQ workers on
+Redis (`softevo.worker.evaluator`). A robot's fitness does not depend on which backend, process or
+batch simulated it, so every backend gives the same learning curve.
 """
 
 from __future__ import annotations
@@ -13,11 +13,15 @@ import hashlib
 import itertools
 import json
 import math
-from collections.abc import Sequence
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any, Self
 
 import numpy as np
+
+from softevo.core.limits import BATCH_SIZE, IN_FLIGHT
 
 
 @dataclass(frozen=True)
@@ -29,26 +33,32 @@ class BatchResult:
     seconds: float
 
 
-class Evaluator(Protocol):
-    """Simulates batches of robots; several batches may be in flight at once (`concurrency`)."""
+class Evaluator(ABC):
+    """Simulates batches of robots. Thread-safe: the generation step keeps several batches in
+    flight at once (one thread each), and `capacity()` says how many of them run at the same
+    moment. A context manager: leaving it closes the backend."""
 
-    #: How many batches the caller should keep in flight to keep this evaluator busy.
-    concurrency: int
-
-    def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray: ...
-
-    def workers(self) -> int:
-        """How many batches this evaluator runs at the same moment now (processes, live RQ
-        workers; at least 1): the coordinator cuts a generation into at least this many."""
-        ...
-
+    @abstractmethod
     def evaluate_batch(
         self, robot_files: Sequence[dict[str, Any]], key: str | None = None
     ) -> BatchResult:
-        """`key` names the batch (run, generation, content) so a backend can deduplicate it."""
-        ...
+        """The batch's speeds, in input order. `key` names the batch (run, generation,
+        content) so a backend can deduplicate it."""
 
-    def close(self) -> None: ...
+    @abstractmethod
+    def capacity(self) -> int:
+        """How many batches run at the same moment now (processes, live RQ workers; at least
+        1): a generation is cut into at least this many."""
+
+    @abstractmethod
+    def close(self) -> None:
+        """Free what the backend holds (processes, connections)."""
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
 
 
 def split_evenly(items: Sequence[int], size: int, workers: int) -> list[list[int]]:
@@ -67,3 +77,44 @@ def batch_digest(robot_files: Sequence[dict[str, Any]]) -> str:
     """16 hex digits naming a batch's content, the same in every process and on every machine."""
     canonical = json.dumps(list(robot_files), separators=(",", ":"), sort_keys=True)
     return hashlib.sha256(canonical.encode()).hexdigest()[:16]
+
+
+def evaluate_in_batches(
+    evaluator: Evaluator,
+    robot_files: Sequence[dict[str, Any]],
+    key: str = "local",
+    *,
+    batch_size: int = BATCH_SIZE,
+    in_flight: int = IN_FLIGHT,
+    check: Callable[[], None] | None = None,
+    on_batch: Callable[[list[int], BatchResult], None] | None = None,
+) -> np.ndarray:
+    """Every file's speed (in order), evaluated in batches of at most `batch_size`, at least
+    `evaluator.capacity()` of them, at most `in_flight` at once, one thread each. `check` is
+    called while they run (it raises to stop: queued batches are dropped); `on_batch` hears of
+    each batch as it lands (its positions in `robot_files`, its result)."""
+    files = list(robot_files)
+    fitness = np.full(len(files), np.nan)
+    if not files:
+        return fitness
+    batches = split_evenly(range(len(files)), batch_size, evaluator.capacity())
+    executor = ThreadPoolExecutor(max(1, min(len(batches), in_flight)), thread_name_prefix="batch")
+    try:
+        futures: dict[Future[BatchResult], list[int]] = {}
+        for batch in batches:
+            chunk = [files[i] for i in batch]
+            batch_key = f"{key}-{batch_digest(chunk)}"
+            futures[executor.submit(evaluator.evaluate_batch, chunk, batch_key)] = batch
+        pending = set(futures)
+        while pending:
+            if check is not None:
+                check()
+            done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+            for future in done:
+                batch, result = futures[future], future.result()
+                if on_batch is not None:
+                    on_batch(batch, result)
+                fitness[batch] = np.asarray(result.fitness, dtype=np.float64)
+    finally:
+        executor.shutdown(wait=False, cancel_futures=True)
+    return fitness

@@ -1,26 +1,24 @@
-"""A whole evolution run in one process: ask, look up the cache, evaluate the rest, tell.
+"""A whole evolution run in one process (`softevo run`): the generation step of
+`softevo.core.generation`, generation after generation, with the state held in memory.
 
-Used by `softevo run`; the service's coordinator drives the same `GeneticAlgorithm` with its own
-persistence. Genomes already evaluated in this run (survivors, duplicates) are not simulated
-again: the run has one simulation setting, so a genome's hash identifies its fitness.
+The service's coordinator runs the same step with persistence around it. Genomes already
+evaluated in this run (survivors, duplicates) are not simulated again: the run has one simulation
+setting, so a genome's hash identifies its fitness.
 """
 
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
-
 from softevo.core.config import RunConfig
 from softevo.core.evaluator import Evaluator
-from softevo.core.ga.algorithm import GeneticAlgorithm, Individual
+from softevo.core.ga.algorithm import GAState, GeneticAlgorithm, Individual
 from softevo.core.ga.stats import CURVE_COLUMNS, GenerationStats
+from softevo.core.generation import Engine
 from softevo.core.robot import Robot
-from softevo.core.robot_file import robot_to_json
 
 
 @dataclass
@@ -40,10 +38,11 @@ class Progress:
 
 @dataclass
 class Evolution:
-    """A run in progress: the algorithm, its fitness cache and its counters."""
+    """A run in progress in this process: its engine, state, fitness cache and counters."""
 
     config: RunConfig
-    algorithm: GeneticAlgorithm
+    engine: Engine
+    state: GAState
     cache: dict[str, float] = field(default_factory=dict)
     evaluations: int = 0
     saved: int = 0
@@ -51,36 +50,34 @@ class Evolution:
 
     @classmethod
     def start(cls, config: RunConfig) -> Evolution:
-        algorithm = GeneticAlgorithm.start(config.ga_config(), config.make_encoding(), config.seed)
-        return cls(config=config, algorithm=algorithm)
+        algorithm = GeneticAlgorithm(config.ga_config(), config.make_encoding())
+        return cls(
+            config=config, engine=Engine(algorithm, config.sim), state=algorithm.start(config.seed)
+        )
+
+    @property
+    def algorithm(self) -> GeneticAlgorithm:
+        return self.engine.algorithm
 
     @property
     def done(self) -> bool:
-        return self.algorithm.done
+        return self.algorithm.done(self.state)
+
+    def individuals(self) -> list[Individual]:
+        """The current generation (what the next step evaluates)."""
+        return self.algorithm.ask(self.state)
 
     def robot(self, individual: Individual) -> Robot:
         return self.algorithm.encoding.to_robot(individual.genome, self.config.sim)
 
     def step(self, evaluator: Evaluator) -> GenerationStats:
-        """Evaluate and tell one generation."""
-        started = time.perf_counter()
-        individuals = self.algorithm.ask()
-        hashes = [individual.genome.hash for individual in individuals]
-        missing: dict[str, int] = {}
-        for index, genome_hash in enumerate(hashes):
-            if genome_hash not in self.cache and genome_hash not in missing:
-                missing[genome_hash] = index
-        if missing:
-            files = [robot_to_json(self.robot(individuals[i])) for i in missing.values()]
-            fitness = evaluator.evaluate(files)
-            self.cache.update(zip(missing, fitness.tolist(), strict=True))
-        saved = len(individuals) - len(missing)
-        self.evaluations += len(missing)
-        self.saved += saved
-        values = np.array([self.cache[h] for h in hashes], dtype=np.float64)
-        stats = self.algorithm.tell(values, evaluations=len(missing), saved=saved)
-        self.elapsed += time.perf_counter() - started
-        return stats
+        """Evaluate and tell one generation (the one generation step of `core.generation`)."""
+        step = self.engine.step(self.state, self.cache, evaluator)
+        self.state = step.state
+        self.evaluations += step.stats.evaluations
+        self.saved += step.stats.saved
+        self.elapsed += step.seconds
+        return step.stats
 
     def run(
         self,
@@ -103,7 +100,7 @@ class Evolution:
 
     def best_robot(self) -> tuple[Robot, float, int] | None:
         """The fastest robot so far, its speed (m/s) and the generation it appeared in."""
-        best = self.algorithm.state.best
+        best = self.state.best
         if best is None:
             return None
         genome, fitness, generation = best
@@ -112,7 +109,7 @@ class Evolution:
     def curve(self) -> list[dict[str, Any]]:
         """One row per finished generation, with the columns of `CURVE_COLUMNS`."""
         rows = []
-        for stats in self.algorithm.state.history:
+        for stats in self.state.history:
             data = stats.to_json()
             rows.append({column: data[column] for column in CURVE_COLUMNS})
         return rows

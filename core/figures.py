@@ -7,10 +7,11 @@ with the Agg backend: no screen needed, and start-up of the commands that never 
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, BinaryIO
+
+from softevo.core.nulls import from_null
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -40,8 +41,7 @@ def pyplot() -> Any:
 
 
 def _value(row: Row, key: str) -> float:
-    value = row.get(key)
-    return math.nan if value is None else float(value)
+    return from_null(row.get(key))
 
 
 def _generation_axis(axes: Any) -> None:

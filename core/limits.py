@@ -14,3 +14,5 @@ SERVICE_MAX_VOXELS = 512
 #: Robots per evaluator call in the service by default (SOFTEVO_BATCH_SIZE): fitness is saved
 #: batch by batch, and the local pool cuts no chunk smaller than this.
 BATCH_SIZE = 4
+#: Batches of one run in flight at once by default (SOFTEVO_QUEUED_BATCHES in the service).
+IN_FLIGHT = 64

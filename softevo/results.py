@@ -50,7 +50,7 @@ def write_results(out: Path, evolution: Evolution) -> None:
     result = summary(evolution)
     _write_json(out / "config.json", result["run"])
     _write_json(out / "curve.json", {"run": result["run"], "generations": result["generations"]})
-    _write_json(out / "state.json", evolution.algorithm.state.to_json())
+    _write_json(out / "state.json", evolution.state.to_json())
     if result["best"] is not None:
         _write_json(out / "best_robot.json", result["best"]["robot"])
     temporary = out / "curve.csv.tmp"
@@ -72,7 +72,7 @@ POPULATION_COLUMNS = ("generation", "index", "fitness", "operator")
 
 def append_population(out: Path, evolution: Evolution) -> None:
     """Add the generation just evaluated to population.csv (started afresh at generation 0)."""
-    state = evolution.algorithm.state
+    state = evolution.state
     if state.previous is None or state.previous_fitness is None:
         return
     generation = state.generation - 1

@@ -99,7 +99,7 @@ def run_command(args: argparse.Namespace) -> int:
 
             evolution.run(evaluator, on_generation=report)
     except KeyboardInterrupt:
-        done = len(evolution.algorithm.state.history)
+        done = len(evolution.state.history)
         print(
             f"interrupted after {done} of {config.generations} generations; "
             f"partial results in {out}/",

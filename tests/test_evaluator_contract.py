@@ -1,11 +1,12 @@
 """The evaluator contract, one suite run against every backend: the in-process serial evaluator,
 the local process pool, and RQ workers on a private Redis (two real `softevo worker` processes).
 
-What the genetic algorithm and the coordinator rely on (`core.evaluator.Evaluator`): the same
-robot files give the same fitness, bit for bit, in the same order, whichever backend, process or
-batch simulated them; an empty batch is an empty array; a robot file that cannot be built is NaN
-(failed, never 0) for that robot alone; `evaluate` is `evaluate_batch(...).fitness`; and batches
-evaluated concurrently from `concurrency` threads give the same results.
+What the generation step relies on (`softevo.core.evaluator.Evaluator`, whose whole interface is
+`evaluate_batch`, `capacity`, `close` and a context manager): the same robot files give the same
+fitness, bit for bit, in the same order, whichever backend, process or batch simulated them; an
+empty batch is an empty array; a robot file that cannot be built is NaN (failed, never 0) for
+that robot alone; a batch's key changes nothing in its result; and batches evaluated from many
+threads at once give the same results.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ SEEDS = (1, 2, 3)
 def robot_files(seed: int) -> list[dict[str, Any]]:
     """The first generation of a quick run: eight robot files (`softevo.robot/1`)."""
     evolution = Evolution.start(resolve({"preset": "quick", "population": 8, "seed": seed}))
-    return [robot_to_json(evolution.robot(item)) for item in evolution.algorithm.ask()]
+    return [robot_to_json(evolution.robot(item)) for item in evolution.individuals()]
 
 
 @pytest.fixture(scope="module")
@@ -46,7 +47,7 @@ def files() -> dict[int, list[dict[str, Any]]]:
 def reference(files: dict[int, list[dict[str, Any]]]) -> dict[int, np.ndarray]:
     """What the serial evaluator says, robot by robot: the truth every backend must match."""
     serial = SerialEvaluator()
-    return {seed: serial.evaluate(batch) for seed, batch in files.items()}
+    return {seed: serial.evaluate_batch(batch).fitness for seed, batch in files.items()}
 
 
 def unbuildable(good: dict[str, Any]) -> list[Any]:
@@ -125,7 +126,7 @@ def test_an_empty_batch_is_an_empty_array(evaluator: Evaluator) -> None:
     result = evaluator.evaluate_batch([], key())
     assert isinstance(result.fitness, np.ndarray)
     assert result.fitness.shape == (0,)
-    assert evaluator.evaluate([]).shape == (0,)
+    assert evaluator.evaluate_batch([]).fitness.shape == (0,)
 
 
 def test_a_robot_that_cannot_be_built_is_nan_alone(
@@ -163,13 +164,13 @@ def test_a_robot_whose_settings_overflow_is_nan_alone(
     assert np.array_equal(result.fitness[[0, 2]], reference[1][:2], equal_nan=True)
 
 
-def test_evaluate_is_evaluate_batch_fitness(
+def test_the_key_names_a_batch_and_changes_no_result(
     evaluator: Evaluator,
     files: dict[int, list[dict[str, Any]]],
     reference: dict[int, np.ndarray],
 ) -> None:
     batch = files[2][:5] + unbuildable(files[2][0])[:1]
-    plain = evaluator.evaluate(batch)
+    plain = evaluator.evaluate_batch(batch).fitness
     assert isinstance(plain, np.ndarray)
     assert np.array_equal(plain, evaluator.evaluate_batch(batch, key()).fitness, equal_nan=True)
     assert np.array_equal(plain[:5], reference[2][:5], equal_nan=True)
@@ -181,7 +182,7 @@ def test_concurrent_batches_from_threads_give_the_same_results(
     files: dict[int, list[dict[str, Any]]],
     reference: dict[int, np.ndarray],
 ) -> None:
-    """`concurrency` threads, each with batches of its own (some sharing robots, one empty, one
+    """Twice `capacity()` threads, each with batches of its own (some sharing robots, one empty, one
     with an unbuildable robot), all at once: every batch gets its own robots' fitness back."""
     batches: list[tuple[list[Any], np.ndarray]] = []
     for seed in SEEDS:
@@ -191,8 +192,7 @@ def test_concurrent_batches_from_threads_give_the_same_results(
     with_bad = np.array([reference[1][0], np.nan, reference[1][1]])
     batches.append(([files[1][0], bad, files[1][1]], with_bad))
     batches.append(([], np.empty(0)))
-    assert evaluator.concurrency >= 1
-    with ThreadPoolExecutor(max_workers=evaluator.concurrency) as pool:
+    with ThreadPoolExecutor(max_workers=2 * evaluator.capacity()) as pool:
         futures = [pool.submit(evaluator.evaluate_batch, batch, key()) for batch, _ in batches]
         results = [future.result(timeout=120) for future in futures]
     for (batch, expected), result in zip(batches, results, strict=True):
@@ -201,7 +201,14 @@ def test_concurrent_batches_from_threads_give_the_same_results(
             assert result.worker and result.seconds > 0
 
 
-def test_workers_counts_what_runs_at_once(evaluator: Evaluator) -> None:
+def test_capacity_counts_what_runs_at_once(evaluator: Evaluator) -> None:
     """Serial: 1; the pool: its 2 processes; RQ: the 2 workers registered on the queue."""
     expected = 1 if isinstance(evaluator, SerialEvaluator) else 2
-    assert evaluator.workers() == expected
+    assert evaluator.capacity() == expected
+
+
+def test_every_backend_is_the_one_narrow_interface(evaluator: Evaluator) -> None:
+    assert isinstance(evaluator, Evaluator)
+    assert Evaluator.__abstractmethods__ == {"evaluate_batch", "capacity", "close"}
+    for name in ("evaluate", "workers", "concurrency"):  # the old second ways, gone
+        assert not hasattr(evaluator, name), name

@@ -33,21 +33,21 @@ from rq import Queue, Worker
 from rq.exceptions import NoSuchJobError
 from rq.job import Job, JobStatus
 
-from softevo.core.evaluator import BatchResult, batch_digest
+from softevo.core.evaluator import BatchResult, Evaluator, batch_digest
+from softevo.core.nulls import from_nulls
 from softevo.worker.queue import JOB_FUNCTION, QUEUE, SERIALIZER, connect, result_key
 
 log = logging.getLogger("softevo.rq")
 REDIS_DOWN = (RedisConnectionError, RedisTimeoutError, ConnectionError, OSError)
 
 
-class RQEvaluator:
-    """Evaluates batches on RQ workers; thread-safe, `concurrency` batches in flight."""
+class RQEvaluator(Evaluator):
+    """Evaluates batches on RQ workers; thread-safe, any number of batches in flight."""
 
     def __init__(
         self,
         redis_url: str,
         *,
-        concurrency: int = 64,
         queue: str = QUEUE,
         deadline_factor: float = 4.0,
         min_deadline: float = 5.0,
@@ -58,7 +58,6 @@ class RQEvaluator:
     ) -> None:
         self.connection = connect(redis_url)
         self.queue = Queue(queue, connection=self.connection, serializer=SERIALIZER)
-        self.concurrency = concurrency
         self.deadline_factor = deadline_factor
         self.min_deadline = min_deadline
         self.initial_deadline = initial_deadline
@@ -72,9 +71,6 @@ class RQEvaluator:
 
     # -- the interface -------------------------------------------------------------------------
 
-    def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray:
-        return self.evaluate_batch(robot_files).fitness
-
     def evaluate_batch(
         self, robot_files: Sequence[dict[str, Any]], key: str | None = None
     ) -> BatchResult:
@@ -84,9 +80,7 @@ class RQEvaluator:
         key = key or batch_digest(files)
         payload = self._collect(files, key)
         if "fitness" in payload:
-            fitness = np.array(
-                [math.nan if v is None else float(v) for v in payload["fitness"]], dtype=np.float64
-            )
+            fitness = from_nulls(payload["fitness"])
             return BatchResult(fitness, str(payload.get("worker", "")), float(payload["seconds"]))
         if len(files) == 1:
             log.warning("batch %s failed for good: %s", key, payload.get("error"))
@@ -99,7 +93,7 @@ class RQEvaluator:
             sum(part.seconds for part in parts),
         )
 
-    def workers(self) -> int:
+    def capacity(self) -> int:
         """Workers registered on the queue, counted at most every 5 s (the last count, or 1,
         while Redis is away): batches are cut so that each of them can have one."""
         count, when = self._workers

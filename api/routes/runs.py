@@ -9,7 +9,8 @@ from typing import Annotated, Any, Literal
 from fastapi import APIRouter, Body, Path, Query, Request, Response, status
 from fastapi.responses import StreamingResponse
 
-from softevo.api import storage
+from softevo.api import store
+from softevo.api.db import Database
 from softevo.api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TokenDep
 from softevo.api.events import event_stream
 from softevo.api.replay import replay
@@ -40,8 +41,8 @@ BAD_BODY: dict[int | str, dict[str, Any]] = {
 }
 
 
-def run_public(db: storage.Database, run: storage.RunRecord) -> RunPublic:
-    counts = storage.progress_counts(db, run.id)
+def run_public(db: Database, run: store.RunRecord) -> RunPublic:
+    counts = store.progress_counts(db, run.id)
     rate = run.evaluations / run.compute_seconds if run.compute_seconds > 0 else None
     per_generation = run.compute_seconds / run.generations_done if run.generations_done else None
     eta = None
@@ -88,7 +89,7 @@ def create_run(
 ) -> RunPublic:
     """Queue a run: a preset plus any setting to override. 422 names a bad or too-large field."""
     config = run_config(body.model_dump(exclude_unset=True), settings.limits)
-    record = storage.create_run(db, config, settings.limits.max_queued)
+    record = store.create_run(db, config, settings.limits.max_queued)
     coordinator.wake()
     response.headers["Location"] = f"/runs/{record.id}"
     return run_public(db, record)
@@ -105,7 +106,7 @@ def list_runs(
     limit: Annotated[int, Query(ge=1, le=200)] = 50,
 ) -> RunPage:
     """Newest first."""
-    records, total = storage.list_runs(db, status_, offset, limit)
+    records, total = store.list_runs(db, status_, offset, limit)
     return RunPage(
         items=[run_public(db, r) for r in records], total=total, offset=offset, limit=limit
     )
@@ -114,7 +115,7 @@ def list_runs(
 @router.get("/{run_id}", responses=NOT_FOUND)
 def get_run(run_id: RunId, db: DatabaseDep) -> RunPublic:
     """Status and progress: generation g of G, evaluations, rate, best fitness, ETA."""
-    return run_public(db, storage.get_run(db, run_id))
+    return run_public(db, store.get_run(db, run_id))
 
 
 @router.post(
@@ -124,7 +125,7 @@ def get_run(run_id: RunId, db: DatabaseDep) -> RunPublic:
 )
 def cancel_run(run_id: RunId, db: DatabaseDep, coordinator: CoordinatorDep) -> RunPublic:
     """Stop a queued or running run at once; the results so far are kept. 409 otherwise."""
-    record = storage.cancel_run(db, run_id)
+    record = store.cancel_run(db, run_id)
     coordinator.cancel(run_id)
     return run_public(db, record)
 
@@ -148,8 +149,8 @@ def get_curve(
     format: Annotated[Literal["json", "csv"], Query()] = "json",
 ) -> Any:
     """One row per committed generation: best, mean, median, min, best so far, diversity, ..."""
-    storage.get_run(db, run_id)
-    rows = storage.curve(db, run_id)
+    store.get_run(db, run_id)
+    rows = store.curve(db, run_id)
     if format == "csv":
         return Response(
             _csv(rows),
@@ -168,8 +169,8 @@ def list_individuals(
     limit: Annotated[int, Query(ge=1, le=5000)] = 1000,
 ) -> IndividualPage:
     """Every individual's fitness by generation (the population dot plot), paginated."""
-    run = storage.get_run(db, run_id)
-    items, total = storage.list_individuals(db, run, generation, offset, limit)
+    run = store.get_run(db, run_id)
+    items, total = store.list_individuals(db, run, generation, offset, limit)
     return IndividualPage(
         run_id=run_id,
         items=items,  # type: ignore[arg-type]
@@ -186,18 +187,18 @@ def get_individual(
     db: DatabaseDep,
 ) -> IndividualDetail:
     """One individual with its genome and robot file."""
-    run = storage.get_run(db, run_id)
-    data = storage.get_individual(db, run, number)
+    run = store.get_run(db, run_id)
+    data = store.get_individual(db, run, number)
     config = RunConfig.model_validate(run.config)
     robot = config.make_encoding().to_robot(Genome.from_json(data["genome"]), config.sim)
     return IndividualDetail(**data, robot=robot_to_json(robot))
 
 
-def _best_robot(db: storage.Database, run_id: int) -> Any:
-    run = storage.get_run(db, run_id)
+def _best_robot(db: Database, run_id: int) -> Any:
+    run = store.get_run(db, run_id)
     best = (run.ga_state or {}).get("best")
     if best is None:
-        raise storage.NotFoundError(f"run {run_id} has no evaluated generation yet")
+        raise store.NotFoundError(f"run {run_id} has no evaluated generation yet")
     config = RunConfig.model_validate(run.config)
     return config.make_encoding().to_robot(Genome.from_json(best["genome"]), config.sim), best
 
@@ -232,7 +233,7 @@ def get_replay(
 )
 def get_events(run_id: RunId, db: DatabaseDep, request: Request) -> StreamingResponse:
     """Server-sent events: `generation` per committed generation, then `end` with the run."""
-    storage.get_run(db, run_id)
+    store.get_run(db, run_id)
     last = request.headers.get("last-event-id")
     after = int(last) if last is not None and last.lstrip("-").isdigit() else -1
     return StreamingResponse(

@@ -7,7 +7,8 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Body, Path, Response, status
 
-from softevo.api import storage
+from softevo.api import store
+from softevo.api.db import Database
 from softevo.api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TokenDep
 from softevo.api.routes.runs import BAD_BODY
 from softevo.api.schemas import Message, SweepBox, SweepCreate, SweepPublic
@@ -24,9 +25,9 @@ def _status(statuses: list[str]) -> str:
     return "completed"
 
 
-def sweep_public(db: storage.Database, sweep_id: int) -> SweepPublic:
-    sweep, runs = storage.get_sweep(db, sweep_id)
-    boxes: dict[tuple[int, int, int], list[storage.RunRecord]] = {}
+def sweep_public(db: Database, sweep_id: int) -> SweepPublic:
+    sweep, runs = store.get_sweep(db, sweep_id)
+    boxes: dict[tuple[int, int, int], list[store.RunRecord]] = {}
     for run in runs:
         boxes.setdefault(tuple(run.config["shape"]), []).append(run)  # type: ignore[arg-type]
     out = []
@@ -87,7 +88,7 @@ def create_sweep(
             )
     stored = body.model_dump(mode="json", exclude_unset=True)
     stored.update(shapes=[list(s) for s in shapes], seeds=seeds)
-    sweep_id, _ = storage.create_sweep(db, stored, configs, settings.limits.max_queued)
+    sweep_id, _ = store.create_sweep(db, stored, configs, settings.limits.max_queued)
     coordinator.wake()
     response.headers["Location"] = f"/sweeps/{sweep_id}"
     return sweep_public(db, sweep_id)

@@ -13,7 +13,7 @@ from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Path, Query, Response
 
-from softevo.api import storage
+from softevo.api import store
 from softevo.api.deps import DatabaseDep
 from softevo.api.replay import replay
 from softevo.api.routes.runs import NOT_FOUND, RunId
@@ -36,8 +36,8 @@ def get_individual_replay(
     fps: Fps = 30.0,
 ) -> dict[str, Any]:
     """Frames of mass positions (and the springs) of individual `number`, for a 3D viewer."""
-    run = storage.get_run(db, run_id)
-    data = storage.get_individual(db, run, number)
+    run = store.get_run(db, run_id)
+    data = store.get_individual(db, run, number)
     config = RunConfig.model_validate(run.config)
     robot = config.make_encoding().to_robot(Genome.from_json(data["genome"]), config.sim)
     return {
@@ -60,9 +60,9 @@ def get_figure(
     """The learning curve, population dot plot or diversity chart as a publication PNG."""
     from softevo.core import figures
 
-    run = storage.get_run(db, run_id)
-    items = storage.list_individuals(db, run, None, 0, 10**9)[0] if kind == "population" else []
-    rows = storage.curve(db, run_id) if kind != "population" else []
+    run = store.get_run(db, run_id)
+    items = store.list_individuals(db, run, None, 0, 10**9)[0] if kind == "population" else []
+    rows = store.curve(db, run_id) if kind != "population" else []
     title = f"run {run_id} ({'x'.join(map(str, run.config['shape']))}, seed {run.seed})"
     buffer = io.BytesIO()
     with _FIGURES:

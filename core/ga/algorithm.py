@@ -1,9 +1,10 @@
 """The genetic algorithm as ask/tell on explicit state.
 
-`ask()` gives the current generation's individuals, `tell(fitness)` takes their fitness (NaN for a
-failed evaluation) and moves on. Generation g is bred from generation g-1 and its fitness with a
-generator seeded by (seed, g) alone, so it can be regenerated exactly from the run's seed and the
-stored population of g-1, and the whole state round-trips through JSON.
+`ask(state)` gives the current generation's individuals, `tell(state, individuals, fitness)` takes
+their fitness (NaN for a failed evaluation) and returns the next state; both are pure. Generation
+g is bred from generation g-1 and its fitness with a generator seeded by (seed, g) alone, so it
+can be regenerated exactly from the run's seed and the stored population of g-1, and the whole
+state round-trips through JSON.
 
 One generation (g > 0), with P the population size:
 
@@ -36,6 +37,7 @@ from softevo.core.encodings import Encoding
 from softevo.core.ga import operators
 from softevo.core.ga.stats import GenerationStats, generation_stats
 from softevo.core.genome import Genome
+from softevo.core.nulls import from_nulls, to_nulls
 
 
 class GAConfig(BaseModel):
@@ -157,68 +159,78 @@ class GAState:
 
 
 def _floats_to_json(values: list[float] | None) -> list[float | None] | None:
-    return None if values is None else [v if math.isfinite(v) else None for v in values]
+    return None if values is None else to_nulls(values)
 
 
 def _floats_from_json(values: list[float | None] | None) -> list[float] | None:
-    return None if values is None else [math.nan if v is None else float(v) for v in values]
+    return None if values is None else from_nulls(values).tolist()
 
 
 class GeneticAlgorithm:
-    """ask()/tell() over a `GAState`; the state is the only thing that changes."""
+    """Pure ask/tell: `ask(state)` breeds a generation, `tell(state, individuals, fitness)`
+    returns the next state; neither changes the state it is given, so whoever holds the state
+    (`softevo run`, the service's coordinator) decides when it becomes the current one."""
 
-    def __init__(self, config: GAConfig, encoding: Encoding, state: GAState) -> None:
+    def __init__(self, config: GAConfig, encoding: Encoding) -> None:
         self.config = config
         self.encoding = encoding
-        self.state = state
 
-    @classmethod
-    def start(cls, config: GAConfig, encoding: Encoding, seed: int) -> GeneticAlgorithm:
-        return cls(config, encoding, GAState(seed=seed))
+    def start(self, seed: int) -> GAState:
+        return GAState(seed=seed)
 
-    @property
-    def done(self) -> bool:
-        return self.state.generation >= self.config.generations
+    def done(self, state: GAState) -> bool:
+        return state.generation >= self.config.generations
 
-    def ask(self) -> list[Individual]:
-        """The individuals of the current generation (the same list until `tell`)."""
-        if self.done:
+    def ask(self, state: GAState) -> list[Individual]:
+        """The individuals of `state`'s current generation (always the same for one state)."""
+        if self.done(state):
             raise RuntimeError(f"the run has finished its {self.config.generations} generations")
-        if self.state.current is None:
-            self.state.current = self._breed()
-        return list(self.state.current)
+        if state.current is not None:
+            return list(state.current)
+        return self._breed(state)
 
-    def tell(self, fitness: np.ndarray | list[float], **counts: int) -> GenerationStats:
-        """Record the current generation's fitness (NaN = failed) and advance one generation.
-
-        `counts` (evaluations, saved, failed, ...) are stored with the generation's statistics.
-        """
-        current = self.ask()
+    def tell(
+        self,
+        state: GAState,
+        individuals: list[Individual],
+        fitness: np.ndarray | list[float],
+        **counts: int,
+    ) -> tuple[GAState, GenerationStats]:
+        """The state after `individuals` (what `ask(state)` gave) scored `fitness` (NaN =
+        failed), and the generation's statistics; `counts` (evaluations, saved, failed, ...)
+        are stored with them."""
         values = np.asarray(fitness, dtype=np.float64)
-        if values.shape != (len(current),):
-            raise ValueError(f"expected {len(current)} fitness values, got shape {values.shape}")
-        state = self.state
+        if values.shape != (len(individuals),):
+            raise ValueError(
+                f"expected {len(individuals)} fitness values, got shape {values.shape}"
+            )
+        best = state.best
         finite = np.isfinite(values)
         if finite.any():
             index = int(np.nanargmax(np.where(finite, values, -np.inf)))
-            if state.best is None or values[index] > state.best[1]:
-                state.best = (current[index].genome, float(values[index]), state.generation)
-        best_so_far = state.best[1] if state.best is not None else math.nan
+            if best is None or values[index] > best[1]:
+                best = (individuals[index].genome, float(values[index]), state.generation)
+        best_so_far = best[1] if best is not None else math.nan
         stats = generation_stats(
             state.generation,
             values,
-            [individual.genome for individual in current],
+            [individual.genome for individual in individuals],
             best_so_far,
             **counts,
         )
-        state.history.append(stats)
-        state.previous, state.previous_fitness = current, values.tolist()
-        state.current = None
-        state.generation += 1
-        return stats
+        following = GAState(
+            seed=state.seed,
+            generation=state.generation + 1,
+            current=None,
+            previous=list(individuals),
+            previous_fitness=values.tolist(),
+            best=best,
+            history=[*state.history, stats],
+        )
+        return following, stats
 
-    def _breed(self) -> list[Individual]:
-        config, encoding, state = self.config, self.encoding, self.state
+    def _breed(self, state: GAState) -> list[Individual]:
+        config, encoding = self.config, self.encoding
         rng = generation_rng(state.seed, state.generation)
         if state.generation == 0 or state.previous is None or state.previous_fitness is None:
             return [Individual(encoding.random(rng), "random") for _ in range(config.population)]

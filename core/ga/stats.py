@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from softevo.core.genome import Genome
+from softevo.core.nulls import from_null, to_null
 
 #: The learning-curve columns of the public contract, in order.
 CURVE_COLUMNS = (
@@ -39,12 +40,11 @@ class GenerationStats:
     saved: int = 0  # individuals whose fitness came from the cache
 
     def to_json(self) -> dict[str, Any]:
-        return {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
-                for k, v in asdict(self).items()}  # fmt: skip
+        return {k: (to_null(v) if isinstance(v, float) else v) for k, v in asdict(self).items()}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> GenerationStats:
-        values = {k: (math.nan if v is None else v) for k, v in data.items()}
+        values = {k: (from_null(v) if v is None else v) for k, v in data.items()}
         return cls(**values)
 
 

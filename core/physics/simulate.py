@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from softevo.core.nulls import to_null
 from softevo.core.physics import kernels
 from softevo.core.robot import Mechanics, Robot, build_mechanics
 from softevo.core.settings import SimSettings
@@ -38,7 +39,7 @@ class Trajectory:
 
     def to_json(self) -> dict:
         phase = None if self.phase is None else [
-            None if not math.isfinite(p) else round(p, 6) for p in self.phase.tolist()
+            None if (q := to_null(p)) is None else round(q, 6) for p in self.phase.tolist()
         ]  # fmt: skip
         return {
             "format": "softevo.trajectory/1",
@@ -80,8 +81,7 @@ class SimResult:
         }
 
 
-def _json_float(value: float) -> float | None:
-    return value if math.isfinite(value) else None
+_json_float = to_null
 
 
 def _scalars(mech: Mechanics) -> tuple:

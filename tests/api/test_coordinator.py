@@ -16,12 +16,13 @@ from alembic.migration import MigrationContext
 from sqlalchemy import func, select
 from sqlalchemy.exc import IntegrityError
 
-from softevo.api import leases, storage
+from softevo.api import store
 from softevo.api.coordinator import Coordinator
 from softevo.api.db import Database
 from softevo.api.models import Base, Individual
 from softevo.core.config import resolve
 from softevo.core.evaluation import SerialEvaluator
+from softevo.core.evaluator import BatchResult
 from softevo.core.evolution import Evolution
 
 REQUEST = {"preset": "quick", "seed": 5, "population": 8, "generations": 4}
@@ -30,7 +31,7 @@ REQUEST = {"preset": "quick", "seed": 5, "population": 8, "generations": 4}
 def wait_status(db: Database, run_id: int, statuses: tuple[str, ...], timeout: float = 60) -> str:
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
-        status = storage.get_run(db, run_id).status
+        status = store.get_run(db, run_id).status
         if status in statuses:
             return status
         time.sleep(0.05)
@@ -60,7 +61,7 @@ def test_migrations_create_exactly_the_models_schema(db: Database) -> None:
 
 
 def test_a_second_row_for_an_individual_is_impossible(db: Database) -> None:
-    run = storage.create_run(db, resolve(REQUEST))
+    run = store.create_run(db, resolve(REQUEST))
     row = {"run_id": run.id, "generation": 0, "index": 0, "genome": {}, "genome_hash": "h",
            "operator": "random", "parents": [], "status": "pending"}  # fmt: skip
     with db.write() as session:
@@ -70,16 +71,16 @@ def test_a_second_row_for_an_individual_is_impossible(db: Database) -> None:
 
 
 def test_lease_is_exclusive_until_it_expires(db: Database) -> None:
-    run = storage.create_run(db, resolve(REQUEST))
-    assert leases.candidates(db, 10) == [run.id]
-    assert leases.acquire(db, run.id, "a", 0.5)
-    assert not leases.acquire(db, run.id, "b", 0.5)
-    assert leases.candidates(db, 10) == []
-    assert leases.renew(db, run.id, "a", 0.5)
+    run = store.create_run(db, resolve(REQUEST))
+    assert store.leases.candidates(db, 10) == [run.id]
+    assert store.leases.acquire(db, run.id, "a", 0.5)
+    assert not store.leases.acquire(db, run.id, "b", 0.5)
+    assert store.leases.candidates(db, 10) == []
+    assert store.leases.renew(db, run.id, "a", 0.5)
     time.sleep(0.6)
-    assert leases.acquire(db, run.id, "b", 5)
-    assert not leases.renew(db, run.id, "a", 5)  # the old owner is fenced off
-    record = storage.get_run(db, run.id)
+    assert store.leases.acquire(db, run.id, "b", 5)
+    assert not store.leases.renew(db, run.id, "a", 5)  # the old owner is fenced off
+    record = store.get_run(db, run.id)
     assert record.status == "running" and record.takeovers == 1
 
 
@@ -90,15 +91,17 @@ class FreezingEvaluator(SerialEvaluator):
         self.calls = calls
         self.release = threading.Event()
 
-    def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray:
+    def evaluate_batch(
+        self, robot_files: Sequence[dict[str, Any]], key: str | None = None
+    ) -> BatchResult:
         self.calls -= 1
         if self.calls < 0:
             self.release.wait(60)
-        return super().evaluate(robot_files)
+        return super().evaluate_batch(robot_files, key)
 
 
 def test_takeover_after_a_coordinator_freezes_gives_the_undisturbed_curve(db: Database) -> None:
-    run = storage.create_run(db, resolve(REQUEST))
+    run = store.create_run(db, resolve(REQUEST))
     frozen = FreezingEvaluator(calls=5)
     first = Coordinator(db, frozen, batch_size=2, lease_seconds=1.0, poll_seconds=0.05)
     first.start()
@@ -116,7 +119,7 @@ def test_takeover_after_a_coordinator_freezes_gives_the_undisturbed_curve(db: Da
     finally:
         second.stop()
         first.stop()
-    record = storage.get_run(db, run.id)
+    record = store.get_run(db, run.id)
     assert record.takeovers >= 1 and record.error is None
     with db.read() as session:
         statuses = session.execute(
@@ -125,30 +128,35 @@ def test_takeover_after_a_coordinator_freezes_gives_the_undisturbed_curve(db: Da
         ).all()  # fmt: skip
     assert "pending" not in dict(statuses)
     assert sum(count for _, count in statuses) == 8 * 4
-    assert storage.curve(db, run.id) == undisturbed_curve(REQUEST)
+    assert store.curve(db, run.id) == undisturbed_curve(REQUEST)
 
 
 def test_a_failing_evaluator_fails_the_run_with_its_reason(db: Database) -> None:
     class Broken(SerialEvaluator):
-        def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray:
+        def evaluate_batch(
+            self, robot_files: Sequence[dict[str, Any]], key: str | None = None
+        ) -> BatchResult:
             raise RuntimeError("worker pool is gone")
 
-    run = storage.create_run(db, resolve(REQUEST))
+    run = store.create_run(db, resolve(REQUEST))
     assert drive(db, run.id, Broken()) == "failed"
-    assert "worker pool is gone" in (storage.get_run(db, run.id).error or "")
+    assert "worker pool is gone" in (store.get_run(db, run.id).error or "")
 
 
 def test_failed_robots_are_nan_ranked_last_not_zero(db: Database) -> None:
     class HalfFailing(SerialEvaluator):
-        def evaluate(self, robot_files: Sequence[dict[str, Any]]) -> np.ndarray:
-            values = super().evaluate(robot_files)
+        def evaluate_batch(
+            self, robot_files: Sequence[dict[str, Any]], key: str | None = None
+        ) -> BatchResult:
+            result = super().evaluate_batch(robot_files, key)
+            values = result.fitness.copy()
             values[::2] = np.nan
-            return values
+            return BatchResult(values, result.worker, result.seconds)
 
-    run = storage.create_run(db, resolve(REQUEST))
+    run = store.create_run(db, resolve(REQUEST))
     assert drive(db, run.id, HalfFailing(), batch_size=8) == "completed"
-    first = storage.curve(db, run.id)[0]
+    first = store.curve(db, run.id)[0]
     assert first["failed"] == 4 and first["min"] is not None and first["min"] > -1
-    items, _ = storage.list_individuals(db, storage.get_run(db, run.id), 0, 0, 100)
+    items, _ = store.list_individuals(db, store.get_run(db, run.id), 0, 0, 100)
     failed = [item for item in items if item["status"] == "failed"]
     assert len(failed) == 4 and all(item["fitness"] is None for item in failed)

@@ -16,7 +16,7 @@ from typing import Any
 import pytest
 from fastapi.testclient import TestClient
 
-from softevo.api import storage
+from softevo.api import store
 from softevo.api.db import Database
 from softevo.api.settings import Limits
 from softevo.core.config import resolve
@@ -199,15 +199,15 @@ def test_a_queue_filled_past_its_bound_over_http_then_drained(
 def test_the_queue_bound_is_counted_in_the_write(db: Database) -> None:
     """On both databases: the bound counts queued runs only, and a sweep is all or nothing."""
     config = resolve(SMALL)
-    first = storage.create_run(db, config, max_queued=2)
-    storage.create_run(db, config, max_queued=2)
-    with pytest.raises(storage.QueueFullError, match="2 runs are waiting"):
-        storage.create_run(db, config, max_queued=2)
-    with pytest.raises(storage.QueueFullError):
-        storage.create_sweep(db, {}, [config, config], max_queued=3)
-    assert storage.list_runs(db, None, 0, 10)[1] == 2
-    storage.cancel_run(db, first.id)  # one leaves the queue: there is room again
-    storage.create_run(db, config, max_queued=2)
+    first = store.create_run(db, config, max_queued=2)
+    store.create_run(db, config, max_queued=2)
+    with pytest.raises(store.QueueFullError, match="2 runs are waiting"):
+        store.create_run(db, config, max_queued=2)
+    with pytest.raises(store.QueueFullError):
+        store.create_sweep(db, {}, [config, config], max_queued=3)
+    assert store.list_runs(db, None, 0, 10)[1] == 2
+    store.cancel_run(db, first.id)  # one leaves the queue: there is room again
+    store.create_run(db, config, max_queued=2)
 
 
 STATE_CHANGING = {"POST", "PUT", "PATCH", "DELETE"}

@@ -12,6 +12,7 @@ import pytest
 from softevo.core.config import resolve
 from softevo.core.encodings import make_encoding
 from softevo.core.ga.algorithm import GAConfig, GAState, GeneticAlgorithm
+from softevo.core.ga.stats import GenerationStats
 
 
 def toy_fitness(individuals: list) -> np.ndarray:
@@ -19,12 +20,32 @@ def toy_fitness(individuals: list) -> np.ndarray:
     return np.array([sum(g == 2 for g in ind.genome.discrete) / 10 for ind in individuals])
 
 
-def make(seed: int = 1, **changes: object) -> GeneticAlgorithm:
+class Held:
+    """The pure algorithm with its state held here, as a driver holds it."""
+
+    def __init__(self, algorithm: GeneticAlgorithm, state: GAState) -> None:
+        self.algorithm, self.state = algorithm, state
+        self.config, self.encoding = algorithm.config, algorithm.encoding
+
+    @property
+    def done(self) -> bool:
+        return self.algorithm.done(self.state)
+
+    def ask(self) -> list:
+        return self.algorithm.ask(self.state)
+
+    def tell(self, fitness: object) -> GenerationStats:
+        self.state, stats = self.algorithm.tell(self.state, self.ask(), fitness)
+        return stats
+
+
+def make(seed: int = 1, **changes: object) -> Held:
     config = GAConfig.model_validate({"population": 12, "generations": 15, **changes})
-    return GeneticAlgorithm.start(config, make_encoding("voxel", (3, 3, 2)), seed)
+    algorithm = GeneticAlgorithm(config, make_encoding("voxel", (3, 3, 2)))
+    return Held(algorithm, algorithm.start(seed))
 
 
-def run(algorithm: GeneticAlgorithm) -> list[float]:
+def run(algorithm: Held) -> list[float]:
     while not algorithm.done:
         algorithm.tell(toy_fitness(algorithm.ask()))
     return [stats.best_so_far for stats in algorithm.state.history]
@@ -78,7 +99,7 @@ def test_generation_can_be_regenerated_from_seed_and_previous_population() -> No
         previous=state.previous,
         previous_fitness=state.previous_fitness,
     )
-    again = GeneticAlgorithm(algorithm.config, algorithm.encoding, rebuilt).ask()
+    again = GeneticAlgorithm(algorithm.config, algorithm.encoding).ask(rebuilt)
     assert [i.genome for i in again] == [i.genome for i in upcoming]
     assert [i.operator for i in again] == [i.operator for i in upcoming]
 
@@ -89,10 +110,8 @@ def test_state_round_trips_through_json_and_resumes_identically() -> None:
     interrupted = make(seed=3)
     for _ in range(6):
         interrupted.tell(toy_fitness(interrupted.ask()))
-    interrupted.ask()  # asked, not told: the state holds the current generation too
     text = json.dumps(interrupted.state.to_json(), allow_nan=False)
-    resumed = GeneticAlgorithm(interrupted.config, interrupted.encoding,
-                               GAState.from_json(json.loads(text)))  # fmt: skip
+    resumed = Held(interrupted.algorithm, GAState.from_json(json.loads(text)))
     run(resumed)
     assert resumed.state.to_json() == whole.state.to_json()
 
@@ -156,3 +175,16 @@ def test_voxel_plus_is_paper_voxel_with_more_mutation() -> None:
     differing = {key for key in paper if paper[key] != plus[key]}
     assert differing == {"preset", "mutation_probability"}
     assert plus["mutation_probability"] == 0.5
+
+
+def test_ask_and_tell_are_pure() -> None:
+    """Neither changes the state it is given: the holder decides when the next one is current."""
+    held = make(seed=9)
+    held.tell(toy_fitness(held.ask()))
+    before = json.dumps(held.state.to_json())
+    individuals = held.algorithm.ask(held.state)
+    assert held.algorithm.ask(held.state) == individuals  # the same generation every time
+    following, stats = held.algorithm.tell(held.state, individuals, toy_fitness(individuals))
+    assert json.dumps(held.state.to_json()) == before
+    assert following.generation == held.state.generation + 1 == stats.generation + 1
+    assert following.history[:-1] == held.state.history and following.history[-1] == stats

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from softevo.core.config import ConfigError, resolve
-from softevo.core.ga.algorithm import GAState, GeneticAlgorithm
-from tests.core.test_algorithm import make, run, toy_fitness
+from softevo.core.ga.algorithm import GAState
+from tests.core.test_algorithm import Held, make, run, toy_fitness
 
 
 @pytest.mark.parametrize("algorithm", ["random", "hillclimb"])
@@ -57,7 +57,7 @@ def test_a_baseline_resumes_from_its_json_state() -> None:
     for _ in range(5):
         part.tell(toy_fitness(part.ask()))
     state = GAState.from_json(json.loads(json.dumps(part.state.to_json())))
-    resumed = GeneticAlgorithm(part.config, part.encoding, state)
+    resumed = Held(part.algorithm, state)
     assert run(resumed) == expected
 
 

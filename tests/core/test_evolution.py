@@ -53,7 +53,7 @@ def test_a_robot_that_cannot_be_built_fails_with_nan_not_zero() -> None:
         resolve(SMALL).make_encoding().genome(np.zeros(27, dtype=int), (0.0, 0.0, 0.0)),
         resolve(SMALL).sim,
     ))  # fmt: skip
-    fitness = SerialEvaluator().evaluate([document, {"format": "softevo.robot/1"}])
+    fitness = SerialEvaluator().evaluate_batch([document, {"format": "softevo.robot/1"}]).fitness
     assert np.isnan(fitness).all()
 
 
@@ -70,7 +70,7 @@ def test_evolution_beats_random_search_on_the_same_budget(pool) -> None:
             robot_to_json(encoding.to_robot(encoding.random(rng), config.sim))
             for _ in range(evolution.evaluations)
         ]
-        ratios.append(evolution.best_robot()[1] / np.nanmax(pool.evaluate(randoms)))
+        ratios.append(evolution.best_robot()[1] / np.nanmax(pool.evaluate_batch(randoms).fitness))
     assert np.mean(ratios) > 1.1, ratios
     assert sum(r > 1 for r in ratios) >= 4, ratios
 
@@ -80,11 +80,11 @@ def test_pool_rebuilds_itself_after_a_worker_process_is_killed() -> None:
     import signal
 
     evolution = Evolution.start(resolve({**SMALL, "seed": 3}))
-    files = [robot_to_json(evolution.robot(item)) for item in evolution.algorithm.ask()]
-    expected = SerialEvaluator().evaluate(files)
-    with PoolEvaluator(2, min_chunk=4) as evaluator:
-        assert np.array_equal(evaluator.evaluate(files), expected, equal_nan=True)
+    files = [robot_to_json(evolution.robot(item)) for item in evolution.individuals()]
+    expected = SerialEvaluator().evaluate_batch(files).fitness
+    with PoolEvaluator(2) as evaluator:
+        assert np.array_equal(evaluator.evaluate_batch(files).fitness, expected, equal_nan=True)
         victim = next(iter(evaluator._pool._processes))  # a live pool process
         os.kill(victim, signal.SIGKILL)
-        assert np.array_equal(evaluator.evaluate(files), expected, equal_nan=True)
+        assert np.array_equal(evaluator.evaluate_batch(files).fitness, expected, equal_nan=True)
         assert victim not in evaluator._pool._processes

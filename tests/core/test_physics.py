@@ -450,7 +450,7 @@ def test_a_robot_whose_integration_diverged_is_unstable_not_fast() -> None:
     for dt, diverges in ((0.003, True), (0.0005, False)):
         config = resolve({**request, "sim": {"duration": 1.5, "settle_time": 0.3, "dt": dt}})
         evolution = Evolution.start(config)
-        robots = [evolution.robot(item) for item in evolution.algorithm.ask()]
+        robots = [evolution.robot(item) for item in evolution.individuals()]
         results = simulate_batch(robots)
         for result in results:
             assert result.stable == np.isfinite(result.speed)

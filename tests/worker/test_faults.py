@@ -470,8 +470,8 @@ def test_a_worker_survives_redis_restarting_under_its_job(
 ) -> None:
     start_workers(workers, "s1")
     evolution = Evolution.start(resolve(REQUEST))
-    files = [robot_to_json(evolution.robot(item)) for item in evolution.algorithm.ask()][:2]
-    expected = SerialEvaluator().evaluate(files)
+    files = [robot_to_json(evolution.robot(item)) for item in evolution.individuals()][:2]
+    expected = SerialEvaluator().evaluate_batch(files).fitness
     evaluator = RQEvaluator(redis_server.url, poll_seconds=0.2)
     redis = Redis.from_url(redis_server.url)
     outcome: list[Any] = []
@@ -578,11 +578,11 @@ def test_a_batch_whose_job_raises(redis_server: RedisServer, workers: Workers) -
     once, and the others get their fitness."""
     start_workers(workers, "e1", "e2")
     evolution = Evolution.start(resolve({**REQUEST, "sim": {"duration": 3.0}}))
-    files = [robot_to_json(evolution.robot(item)) for item in evolution.algorithm.ask()][:4]
+    files = [robot_to_json(evolution.robot(item)) for item in evolution.individuals()][:4]
     poison = copy.deepcopy(files[0])
     poison["poison"] = True
     batch = [files[0], poison, files[1], files[2]]
-    expected = SerialEvaluator().evaluate([files[0], files[1], files[2]])
+    expected = SerialEvaluator().evaluate_batch([files[0], files[1], files[2]]).fitness
     result, elapsed, jobs = poisoned_batch(redis_server.url, "evaluate_batch", batch, "raises")
     with Redis.from_url(redis_server.url) as redis:
         first = fetch(redis, "softevo-raises-a1")
@@ -603,9 +603,9 @@ def test_a_job_that_finishes_without_a_result_is_retried_not_waited_on(
     reports is failed; it does not wait forever, and it does not loop."""
     start_workers(workers, "f1")
     evolution = Evolution.start(resolve({**REQUEST, "sim": {"duration": 3.0}}))
-    files = [robot_to_json(evolution.robot(item)) for item in evolution.algorithm.ask()][:2]
+    files = [robot_to_json(evolution.robot(item)) for item in evolution.individuals()][:2]
     silent = {**copy.deepcopy(files[1]), "poison": True}
-    expected = SerialEvaluator().evaluate(files[:1])
+    expected = SerialEvaluator().evaluate_batch(files[:1]).fitness
     result, elapsed, jobs = poisoned_batch(
         redis_server.url, "evaluate_batch_silently", [files[0], silent], "silent"
     )
@@ -635,8 +635,8 @@ def test_a_batch_taken_by_a_worker_paused_while_idle_is_run_elsewhere(
     start_workers(workers, "i2")
     wait_until(lambda: blocked() == 2, 10, "i2 waiting for jobs")
     evolution = Evolution.start(resolve({**REQUEST, "sim": {"duration": 3.0}}))
-    files = [robot_to_json(evolution.robot(item)) for item in evolution.algorithm.ask()][:2]
-    expected = SerialEvaluator().evaluate(files)
+    files = [robot_to_json(evolution.robot(item)) for item in evolution.individuals()][:2]
+    expected = SerialEvaluator().evaluate_batch(files).fitness
     evaluator = RQEvaluator(redis_server.url, poll_seconds=0.2, initial_deadline=5.0)
     outcome: list[Any] = []
     thread = threading.Thread(
@@ -666,8 +666,8 @@ def test_results_are_plain_json_and_garbage_on_the_result_list_is_ignored(
     """Jobs are stored as JSON (never pickle), and bytes on a batch's result list that are not a
     well-formed JSON result (a pickle, the wrong number of speeds) are skipped, not trusted."""
     evolution = Evolution.start(resolve(REQUEST))
-    files = [robot_to_json(evolution.robot(item)) for item in evolution.algorithm.ask()][:2]
-    expected = SerialEvaluator().evaluate(files)
+    files = [robot_to_json(evolution.robot(item)) for item in evolution.individuals()][:2]
+    expected = SerialEvaluator().evaluate_batch(files).fitness
     redis = Redis.from_url(redis_server.url)
     evaluator = RQEvaluator(redis_server.url, poll_seconds=0.2)
     try:

@@ -20,13 +20,15 @@ def test_rq_evaluator_matches_the_serial_one(redis_server, workers, worker_class
     workers.start("one", "--worker-class", worker_class)
     workers.wait_ready("one")
     evolution = Evolution.start(resolve({"preset": "quick", "population": 6, "seed": 2}))
-    files = [robot_to_json(evolution.robot(item)) for item in evolution.algorithm.ask()]
+    files = [robot_to_json(evolution.robot(item)) for item in evolution.individuals()]
     evaluator = RQEvaluator(redis_server.url)
     try:
         result = evaluator.evaluate_batch(files, key=f"smoke-{worker_class}")
     finally:
         evaluator.close()
-    assert np.array_equal(result.fitness, SerialEvaluator().evaluate(files), equal_nan=True)
+    assert np.array_equal(
+        result.fitness, SerialEvaluator().evaluate_batch(files).fitness, equal_nan=True
+    )
     assert result.worker == "one" and result.seconds > 0
 
 
@@ -73,7 +75,7 @@ def test_the_first_job_pays_no_compilation(redis_server, workers, tmp_path, monk
     evolution = Evolution.start(
         resolve({"preset": "quick", "population": 4, "seed": 3, "sim": {"duration": 1.0}})
     )
-    files = [robot_to_json(evolution.robot(item)) for item in evolution.algorithm.ask()]
+    files = [robot_to_json(evolution.robot(item)) for item in evolution.individuals()]
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba-cache"))  # empty: it compiles
     workers.start("warm")
     workers.wait_ready("warm")

@@ -7,7 +7,6 @@ fitness, generation commits) live in `api.leases` and `api.coordinator`.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from typing import Any
@@ -18,6 +17,7 @@ from softevo.api.db import Database
 from softevo.api.models import ACTIVE_STATUSES, Generation, Individual, Run, Sweep
 from softevo.core.config import RunConfig
 from softevo.core.ga.stats import CURVE_COLUMNS
+from softevo.core.nulls import to_null
 
 
 def now() -> datetime:
@@ -158,10 +158,6 @@ def cancel_run(db: Database, run_id: int) -> RunRecord:
     return get_run(db, run_id)
 
 
-def _finite(value: float | None) -> float | None:
-    return value if value is not None and math.isfinite(value) else None
-
-
 def curve(db: Database, run_id: int) -> list[dict[str, Any]]:
     """Committed generations in order, with the columns of `CURVE_COLUMNS`."""
     with db.read() as session:
@@ -176,7 +172,7 @@ def individual_json(row: Individual, population: int) -> dict[str, Any]:
         "id": row.generation * population + row.index,
         "generation": row.generation,
         "index": row.index,
-        "fitness": _finite(row.fitness),
+        "fitness": to_null(row.fitness),
         "status": row.status,
         "operator": row.operator,
         "parents": row.parents,

@@ -16,7 +16,7 @@ from sqlalchemy.orm import Session
 
 from softevo.api.db import Database
 from softevo.api.models import Run
-from softevo.api.storage import now
+from softevo.api.store.runs import now
 
 
 def _orphaned(at: float):  # type: ignore[no-untyped-def]

@@ -1,0 +1,192 @@
+"""The coordinator's reads and writes while it drives a run: the run to drive, the fitness its
+earlier generations already have, a generation's individuals (one multi-row insert), each batch's
+fitness (one statement per batch) and the generation's commit (statistics, cached fitness, GA
+state and counters, all or nothing). Every write is fenced by the lease in its own transaction
+(`leases.owns`), so a coordinator that lost the run can never write over its successor."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from sqlalchemy import bindparam, insert, select, update
+from sqlalchemy.orm import Session
+
+from softevo.api.db import Database
+from softevo.api.models import Generation, Individual, Run
+from softevo.api.store import leases
+from softevo.api.store.runs import now
+from softevo.core.nulls import from_null, to_null
+from softevo.core.status import IndividualStatus, RunStatus
+
+CURVE_FIELDS = (
+    "generation", "best", "mean", "median", "min", "std", "best_so_far", "diversity", "size",
+    "failed", "evaluations", "saved",
+)  # fmt: skip
+INDIVIDUALS = Individual.__table__
+
+
+@dataclass(frozen=True)
+class Lease:
+    """Who drives (the coordinator's id) and for how long each write renews the lease (s)."""
+
+    owner: str
+    seconds: float
+
+
+class LeaseLostError(RuntimeError):
+    """This coordinator no longer owns the run (taken over, cancelled or finished)."""
+
+
+class GenerationMismatchError(RuntimeError):
+    """The stored generation is not the one the algorithm regenerated from the run's seed."""
+
+
+def _fence(session: Session, run_id: int, lease: Lease) -> None:
+    if not leases.owns(session, run_id, lease.owner, lease.seconds):
+        raise LeaseLostError(f"run {run_id}: lease lost or run no longer running")
+
+
+def load(db: Database, run_id: int) -> tuple[dict[str, Any], dict[str, Any] | None]:
+    """The run's config and the GA state stored with its last committed generation."""
+    with db.read() as session:
+        row = session.execute(select(Run.config, Run.ga_state).where(Run.id == run_id)).one()
+        return row.config, row.ga_state
+
+
+def known_fitness(db: Database, run_id: int, before: int) -> dict[str, float]:
+    """Fitness (NaN = failed) of every genome evaluated in generations before `before`."""
+    with db.read() as session:
+        rows = session.execute(
+            select(Individual.genome_hash, Individual.fitness).where(
+                Individual.run_id == run_id,
+                Individual.generation < before,
+                Individual.status != IndividualStatus.PENDING,
+            )
+        )
+        return {genome_hash: from_null(fitness) for genome_hash, fitness in rows}
+
+
+def keep_generation(
+    db: Database, run_id: int, lease: Lease, generation: int, members: Sequence[dict[str, Any]]
+) -> dict[int, float]:
+    """Insert the generation's members (dicts of genome, genome_hash, operator, parents), once;
+    if it was kept before (a takeover), check it is the same and return the fitness saved."""
+    with db.write() as session:
+        _fence(session, run_id, lease)
+        rows = session.execute(
+            select(Individual.index, Individual.genome_hash, Individual.status, Individual.fitness)
+            .where(Individual.run_id == run_id, Individual.generation == generation)
+        ).all()  # fmt: skip
+        if not rows:
+            session.execute(
+                insert(Individual),
+                [
+                    {**member, "run_id": run_id, "generation": generation, "index": index,
+                     "status": IndividualStatus.PENDING.value}
+                    for index, member in enumerate(members)
+                ],
+            )  # fmt: skip
+            return {}
+        stored = {row.index: row.genome_hash for row in rows}
+        if stored != {index: member["genome_hash"] for index, member in enumerate(members)}:
+            raise GenerationMismatchError(
+                f"generation {generation} in the database differs from the one the GA "
+                "regenerated from the run's seed; refusing to mix them"
+            )
+        done = (IndividualStatus.EVALUATED, IndividualStatus.FAILED)
+        return {row.index: from_null(row.fitness) for row in rows if row.status in done}
+
+
+_SET_FITNESS = (
+    update(INDIVIDUALS)
+    .where(
+        INDIVIDUALS.c.run_id == bindparam("b_run"),
+        INDIVIDUALS.c.generation == bindparam("b_generation"),
+        INDIVIDUALS.c["index"] == bindparam("b_index"),
+        INDIVIDUALS.c.status == IndividualStatus.PENDING.value,  # never a second fitness
+    )
+    .values(
+        fitness=bindparam("b_fitness"),
+        status=bindparam("b_status"),
+        eval_seconds=bindparam("b_seconds"),
+        worker=bindparam("b_worker"),
+        evaluated_at=bindparam("b_at"),
+    )
+)
+
+
+def _fitness_rows(
+    run_id: int, generation: int, fitness: dict[int, float], status: IndividualStatus | None,
+    seconds: float | None, worker: str | None,
+) -> list[dict[str, Any]]:  # fmt: skip
+    at = now()
+    return [
+        {"b_run": run_id, "b_generation": generation, "b_index": index,
+         "b_fitness": to_null(value), "b_seconds": seconds, "b_worker": worker, "b_at": at,
+         "b_status": (status or (IndividualStatus.EVALUATED if to_null(value) is not None
+                                 else IndividualStatus.FAILED)).value}
+        for index, value in fitness.items()
+    ]  # fmt: skip
+
+
+def save_fitness(
+    db: Database, run_id: int, lease: Lease, generation: int, fitness: dict[int, float],
+    worker: str, seconds_each: float,
+) -> None:  # fmt: skip
+    """One batch's fitness (by index; NaN = failed), written once per individual."""
+    with db.write() as session:
+        _fence(session, run_id, lease)
+        rows = _fitness_rows(run_id, generation, fitness, None, seconds_each, worker[:128])
+        if rows:
+            session.connection().execute(_SET_FITNESS, rows)
+
+
+def commit_generation(
+    db: Database,
+    run_id: int,
+    lease: Lease,
+    stats: dict[str, Any],
+    cached: dict[int, float],
+    state: dict[str, Any],
+    best: tuple[float, int] | None,
+    done: bool,
+    seconds: float,
+) -> None:
+    """The generation's statistics (`stats`: GenerationStats.to_json()), the fitness of members
+    copied from earlier generations, the GA state and the run's counters, all or nothing."""
+    generation = stats["generation"]
+    with db.write() as session:
+        _fence(session, run_id, lease)
+        rows = _fitness_rows(run_id, generation, cached, IndividualStatus.CACHED, None, None)
+        if rows:
+            session.connection().execute(_SET_FITNESS, rows)
+        session.add(
+            Generation(run_id=run_id, **{key: stats[key] for key in CURVE_FIELDS},
+                       seconds=seconds, committed_at=now())
+        )  # fmt: skip
+        values: dict[str, Any] = {
+            "ga_state": state,
+            "generations_done": generation + 1,
+            "evaluations": Run.evaluations + stats["evaluations"],
+            "saved": Run.saved + stats["saved"],
+            "compute_seconds": Run.compute_seconds + seconds,
+        }
+        if best is not None:
+            values.update(best_fitness=best[0], best_generation=best[1])
+        if done:
+            values.update(status=RunStatus.COMPLETED.value, finished_at=now(), lease_owner=None,
+                          lease_expires=None)  # fmt: skip
+        session.execute(update(Run).where(Run.id == run_id).values(**values))
+
+
+def fail(db: Database, run_id: int, owner: str, message: str) -> None:
+    """The run failed for good (a bug, a broken evaluator): say why on it."""
+    with db.write() as session:
+        session.execute(
+            update(Run)
+            .where(Run.id == run_id, Run.lease_owner == owner)
+            .values(status=RunStatus.FAILED.value, error=message[:2000], finished_at=now(),
+                    lease_owner=None, lease_expires=None)
+        )  # fmt: skip

@@ -1,0 +1,117 @@
+"""One generation step, the only one: ask -> split the generation into genomes whose fitness is
+known and new ones -> evaluate the new ones in batches, several in flight -> tell.
+
+`softevo run` (`softevo.core.evolution`) and the service's coordinator both run it; the
+coordinator adds persistence through `Hooks`, never a second copy of the loop, so an algorithm
+plugs in once and runs everywhere. Counting is the same for both: a genome seen in an earlier
+generation of the run is not simulated again (`saved`); within a generation, each distinct new
+genome is simulated once (`evaluations`), and one whose fitness a hook already holds (saved
+before a crash) is counted as evaluated but not simulated again.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from softevo.core.encodings import Encoding
+from softevo.core.evaluator import BatchResult, Evaluator, evaluate_in_batches
+from softevo.core.ga.algorithm import GAState, GeneticAlgorithm, Individual
+from softevo.core.ga.stats import GenerationStats
+from softevo.core.limits import BATCH_SIZE, IN_FLIGHT
+from softevo.core.robot_file import robot_to_json
+from softevo.core.settings import SimSettings
+
+
+class Hooks:
+    """What happens around a step (persistence, cancellation); by default nothing."""
+
+    def check(self) -> None:
+        """Raise to stop the step (cancelled, lease lost, shutdown); called while batches run."""
+
+    def individuals(self, generation: int, individuals: list[Individual]) -> dict[int, float]:
+        """The generation is about to be evaluated: keep it; return fitness already known for
+        some of its members (by index; NaN = failed), which are then not simulated again."""
+        return {}
+
+    def batch(self, generation: int, indices: list[int], result: BatchResult) -> None:
+        """One batch's fitness landed (for `indices` of the generation, in order)."""
+
+
+@dataclass(frozen=True)
+class Step:
+    """What one generation step did, and the state after it."""
+
+    individuals: list[Individual]
+    fitness: np.ndarray  # of every individual, in order (NaN = failed)
+    evaluated: frozenset[int]  # indices whose fitness came from this step (not from the cache)
+    stats: GenerationStats
+    state: GAState  # the state after the generation was told
+    seconds: float
+
+
+@dataclass(frozen=True)
+class Engine:
+    """An algorithm with the encoding and simulation settings of one run, and how it evaluates:
+    batches of at most `batch_size` robots, at most `in_flight` of them at once."""
+
+    algorithm: GeneticAlgorithm
+    sim: SimSettings
+    batch_size: int = BATCH_SIZE
+    in_flight: int = IN_FLIGHT
+
+    @property
+    def encoding(self) -> Encoding:
+        return self.algorithm.encoding
+
+    def robot_file(self, individual: Individual) -> dict[str, Any]:
+        return robot_to_json(self.encoding.to_robot(individual.genome, self.sim))
+
+    def step(
+        self,
+        state: GAState,
+        cache: dict[str, float],
+        evaluator: Evaluator,
+        hooks: Hooks | None = None,
+        key: str = "local",
+    ) -> Step:
+        """Run generation `state.generation`. `cache` (genome hash -> fitness of the run's
+        earlier generations) gains this generation's new genomes; `key` prefixes batch keys."""
+        hooks = hooks or Hooks()
+        started = time.perf_counter()
+        generation = state.generation
+        individuals = self.algorithm.ask(state)
+        known = hooks.individuals(generation, individuals)
+        hashes = [individual.genome.hash for individual in individuals]
+        first: dict[str, int] = {}
+        for index, genome_hash in enumerate(hashes):
+            if genome_hash not in cache and genome_hash not in first:
+                first[genome_hash] = index
+        todo = [index for index in first.values() if index not in known]
+        fitness = {index: known[index] for index in first.values() if index in known}
+        if todo:
+            files = [self.robot_file(individuals[i]) for i in todo]
+
+            def landed(positions: list[int], result: BatchResult) -> None:
+                hooks.batch(generation, [todo[p] for p in positions], result)
+
+            values = evaluate_in_batches(
+                evaluator, files, f"{key}-gen{generation}", batch_size=self.batch_size,
+                in_flight=self.in_flight, check=hooks.check, on_batch=landed,
+            )  # fmt: skip
+            fitness.update(zip(todo, values.tolist(), strict=True))
+        cache.update({hashes[index]: value for index, value in fitness.items()})
+        values = np.array([cache[h] for h in hashes], dtype=np.float64)
+        evaluations = len(first)
+        following, stats = self.algorithm.tell(
+            state,
+            individuals,
+            values,
+            evaluations=evaluations,
+            saved=len(individuals) - evaluations,
+        )
+        seconds = time.perf_counter() - started
+        return Step(individuals, values, frozenset(first.values()), stats, following, seconds)

@@ -1,0 +1,28 @@
+"""The NaN <-> null rule, written once: a number that is not finite (a failed robot's speed, the
+statistics of a generation where all failed) is `null` in JSON and NULL in the database, and
+`null` reads back as NaN. Never 0, which would be a real speed."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+
+import numpy as np
+
+
+def to_null(value: float | None) -> float | None:
+    """A finite number as it is, anything else (NaN, infinities, None) as None."""
+    return value if value is not None and math.isfinite(value) else None
+
+
+def from_null(value: float | None) -> float:
+    """None as NaN, a number as a float."""
+    return math.nan if value is None else float(value)
+
+
+def to_nulls(values: Iterable[float]) -> list[float | None]:
+    return [to_null(value) for value in values]
+
+
+def from_nulls(values: Iterable[float | None]) -> np.ndarray:
+    return np.array([from_null(value) for value in values], dtype=np.float64)
