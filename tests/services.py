@@ -33,6 +33,9 @@ def require(binary: str) -> str:
     return path
 
 
+ROOT = Path(__file__).resolve().parent.parent
+
+
 class RedisServer:
     """A redis-server of our own (no persistence), which a test may kill and start again."""
 
@@ -131,7 +134,8 @@ class Workers:
 
     def start(self, name: str, *extra: str) -> subprocess.Popen[bytes]:
         log = (self.workdir / f"worker-{name}.log").open("wb")
-        env = {**os.environ, "SOFTEVO_REDIS_URL": self.redis_url}
+        # the repository on the path: the fault tests' own job functions (tests.worker.poison_job)
+        env = {**os.environ, "SOFTEVO_REDIS_URL": self.redis_url, "PYTHONPATH": str(ROOT)}
         process = subprocess.Popen(
             [sys.executable, "-P", "-m", "softevo.cli", "worker", "--name", name, *extra],
             env=env,
