@@ -14,10 +14,11 @@ from starlette.concurrency import run_in_threadpool
 
 from softevo.api import store
 from softevo.api.db import Database
+from softevo.core.status import FINAL
 
 POLL_SECONDS = 0.25
 KEEPALIVE_SECONDS = 15.0
-TERMINAL = ("completed", "failed", "cancelled")
+TERMINAL = FINAL
 
 
 def _event(name: str, data: Any, event_id: int | None = None) -> str:

@@ -26,11 +26,11 @@ from sqlalchemy import (
 )
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column
 
-RUN_STATUSES = ("queued", "running", "completed", "failed", "cancelled")
-ACTIVE_STATUSES = ("queued", "running")
-#: pending: waiting for fitness; evaluated: simulated in this generation; cached: same genome as
-#: an earlier generation's, fitness copied; failed: the simulation failed (fitness NULL).
-INDIVIDUAL_STATUSES = ("pending", "evaluated", "cached", "failed")
+from softevo.core.status import IndividualStatus, RunStatus
+
+#: The values the status columns hold (`softevo.core.status`).
+RUN_STATUSES = tuple(RunStatus)
+INDIVIDUAL_STATUSES = tuple(IndividualStatus)
 
 
 class UTCDateTime(TypeDecorator[datetime]):
@@ -120,7 +120,7 @@ class Individual(Base):
     genome_hash: Mapped[str] = mapped_column(String(32))
     operator: Mapped[str] = mapped_column(String(32))
     parents: Mapped[list[int]] = mapped_column(JSON)
-    status: Mapped[str] = mapped_column(String(16), default="pending")
+    status: Mapped[str] = mapped_column(String(16), default=IndividualStatus.PENDING.value)
     fitness: Mapped[float | None] = mapped_column(Float)
     eval_seconds: Mapped[float | None] = mapped_column(Float)
     worker: Mapped[str | None] = mapped_column(String(128))

@@ -15,6 +15,7 @@ from pydantic import BaseModel, ConfigDict, Field, create_model
 from softevo.core.config import PAPER_NINE_SHAPES
 from softevo.core.ga.algorithm import GAConfig
 from softevo.core.limits import MAX_SIDE
+from softevo.core.status import IndividualStatus, RunStatus
 
 Side = Annotated[int, Field(ge=1, le=MAX_SIDE)]
 Shape = tuple[Side, Side, Side]
@@ -72,7 +73,7 @@ class RunProgress(BaseModel):
 
 class RunPublic(BaseModel):
     id: int
-    status: Literal["queued", "running", "completed", "failed", "cancelled"]
+    status: RunStatus
     preset: str | None
     seed: int
     sweep_id: int | None
@@ -116,7 +117,7 @@ class IndividualPublic(BaseModel):
     generation: int
     index: int
     fitness: float | None
-    status: Literal["pending", "evaluated", "cached", "failed"]
+    status: IndividualStatus
     operator: str
     parents: list[int]
     genome_hash: str
@@ -150,7 +151,7 @@ class SweepBox(BaseModel):
 
 class SweepPublic(BaseModel):
     id: int
-    status: Literal["queued", "running", "completed", "failed", "cancelled"]
+    status: RunStatus
     created_at: datetime
     request: dict[str, Any]
     boxes: list[SweepBox]

@@ -38,6 +38,8 @@ import httpx
 
 from softevo.core import figures
 from softevo.core.config import resolve
+from softevo.core.status import FINAL as FINAL_STATUSES
+from softevo.core.status import RunStatus
 
 PAPER_NINE = [
     (3, 3, 6),
@@ -50,7 +52,7 @@ PAPER_NINE = [
     (6, 6, 6),
     (9, 9, 2),
 ]
-FINAL = {"completed", "failed", "cancelled"}
+FINAL = {str(status) for status in FINAL_STATUSES}
 #: 2 pi rad/s: one actuation period a second, 9 in paper-voxel's clock (1.4 at the paper's 1 rad/s)
 FAST_OMEGA = 2 * math.pi
 CLOCK = ("clock", "omega 2pi")  # the boxes' sweep again at FAST_OMEGA
@@ -246,7 +248,9 @@ class Group:
     runs: list[dict[str, Any]] = field(default_factory=list)
 
     def row(self) -> dict[str, Any]:
-        best = [r["progress"]["best_fitness"] for r in self.runs if r["status"] == "completed"]
+        best = [
+            r["progress"]["best_fitness"] for r in self.runs if r["status"] == RunStatus.COMPLETED
+        ]
         best = [b for b in best if b is not None]
         walls = [_wall(r) for r in self.runs]
         return {
@@ -254,7 +258,7 @@ class Group:
             "variant": self.variant,
             "shape": "x".join(map(str, self.shape)),
             "seeds": " ".join(str(r["seed"]) for r in self.runs),
-            "completed": sum(r["status"] == "completed" for r in self.runs),
+            "completed": sum(r["status"] == RunStatus.COMPLETED for r in self.runs),
             "best_mean": statistics.fmean(best) if best else None,
             "best_std": statistics.pstdev(best) if best else None,
             "best_min": min(best) if best else None,
@@ -262,7 +266,7 @@ class Group:
             "best_by_seed": " ".join(
                 f"{r['seed']}:{r['progress']['best_fitness']:.6g}"
                 for r in self.runs
-                if r["status"] == "completed" and r["progress"]["best_fitness"] is not None
+                if r["status"] == RunStatus.COMPLETED and r["progress"]["best_fitness"] is not None
             ),
             "evaluations_mean": statistics.fmean(r["progress"]["evaluations"] for r in self.runs),
             "generations": self.runs[0]["progress"]["generations"] if self.runs else None,
@@ -316,7 +320,7 @@ class Experiments:
         that has not failed or been cancelled (a queued or running one finishes by itself)."""
         sweep_ids: set[int] = set()
         for run in self._all_runs():
-            if run["status"] in {"failed", "cancelled"}:
+            if run["status"] in {RunStatus.FAILED, RunStatus.CANCELLED}:
                 continue
             if run.get("sweep_id") is not None:
                 sweep_ids.add(run["sweep_id"])
@@ -338,7 +342,9 @@ class Experiments:
     def submit_sweep(self, request: dict[str, Any]) -> dict[str, Any]:
         for sweep in self._sweeps:
             statuses = [s for box in sweep["boxes"] for s in box["statuses"]]
-            if sweep["request"] == request and not {"failed", "cancelled"} & set(statuses):
+            if sweep["request"] == request and not {RunStatus.FAILED, RunStatus.CANCELLED} & set(
+                statuses
+            ):
                 self._sweeps.remove(sweep)
                 self.reused += len(statuses)
                 return sweep

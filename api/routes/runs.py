@@ -29,6 +29,7 @@ from softevo.core.config import RunConfig
 from softevo.core.ga.stats import CURVE_COLUMNS
 from softevo.core.genome import Genome
 from softevo.core.robot_file import robot_to_json
+from softevo.core.status import IndividualStatus, RunStatus
 
 router = APIRouter(prefix="/runs", tags=["runs"])
 RunId = Annotated[int, Path(ge=1, le=2**31 - 1, description="run id")]
@@ -46,7 +47,7 @@ def run_public(db: Database, run: store.RunRecord) -> RunPublic:
     rate = run.evaluations / run.compute_seconds if run.compute_seconds > 0 else None
     per_generation = run.compute_seconds / run.generations_done if run.generations_done else None
     eta = None
-    if run.status in ("queued", "running") and per_generation is not None:
+    if RunStatus(run.status).active and per_generation is not None:
         eta = per_generation * (run.generations_total - run.generations_done)
     return RunPublic(
         id=run.id,
@@ -59,7 +60,7 @@ def run_public(db: Database, run: store.RunRecord) -> RunPublic:
             generations=run.generations_total,
             evaluations=run.evaluations,
             saved=run.saved,
-            fitness_saved=sum(n for s, n in counts.items() if s != "pending"),
+            fitness_saved=sum(n for s, n in counts.items() if s != IndividualStatus.PENDING),
             evaluations_per_second=rate,
             best_fitness=run.best_fitness,
             best_generation=run.best_generation,
@@ -99,7 +100,7 @@ def create_run(
 def list_runs(
     db: DatabaseDep,
     status_: Annotated[
-        Literal["queued", "running", "completed", "failed", "cancelled"] | None,
+        RunStatus | None,
         Query(alias="status"),
     ] = None,
     offset: Annotated[int, Query(ge=0, le=10**9)] = 0,

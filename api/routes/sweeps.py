@@ -13,16 +13,17 @@ from softevo.api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TokenDep
 from softevo.api.routes.runs import BAD_BODY
 from softevo.api.schemas import Message, SweepBox, SweepCreate, SweepPublic
 from softevo.api.validation import RequestError, run_config
+from softevo.core.status import RunStatus
 
 router = APIRouter(prefix="/sweeps", tags=["sweeps"])
 SweepId = Annotated[int, Path(ge=1, le=2**31 - 1, description="sweep id")]
 
 
 def _status(statuses: list[str]) -> str:
-    for candidate in ("running", "queued", "failed", "cancelled"):
+    for candidate in (RunStatus.RUNNING, RunStatus.QUEUED, RunStatus.FAILED, RunStatus.CANCELLED):
         if candidate in statuses:
             return candidate
-    return "completed"
+    return RunStatus.COMPLETED
 
 
 def sweep_public(db: Database, sweep_id: int) -> SweepPublic:
@@ -32,14 +33,14 @@ def sweep_public(db: Database, sweep_id: int) -> SweepPublic:
         boxes.setdefault(tuple(run.config["shape"]), []).append(run)  # type: ignore[arg-type]
     out = []
     for shape, members in boxes.items():
-        best = [r.best_fitness for r in members if r.status == "completed"]
+        best = [r.best_fitness for r in members if r.status == RunStatus.COMPLETED]
         best = [b for b in best if b is not None]
         out.append(
             SweepBox(
                 shape=shape,
                 run_ids=[r.id for r in members],
                 statuses=[r.status for r in members],
-                completed=sum(r.status == "completed" for r in members),
+                completed=sum(r.status == RunStatus.COMPLETED for r in members),
                 best_mean=statistics.fmean(best) if best else None,
                 best_std=statistics.pstdev(best) if best else None,
                 best_min=min(best) if best else None,

@@ -17,12 +17,14 @@ from sqlalchemy.orm import Session
 from softevo.api.db import Database
 from softevo.api.models import Run
 from softevo.api.store.runs import now
+from softevo.core.status import RunStatus
 
 
 def _orphaned(at: float):  # type: ignore[no-untyped-def]
     return or_(
-        Run.status == "queued",
-        (Run.status == "running") & (or_(Run.lease_expires.is_(None), Run.lease_expires < at)),
+        Run.status == RunStatus.QUEUED,
+        (Run.status == RunStatus.RUNNING)
+        & (or_(Run.lease_expires.is_(None), Run.lease_expires < at)),
     )
 
 
@@ -40,11 +42,13 @@ def acquire(db: Database, run_id: int, owner: str, seconds: float) -> bool:
             update(Run)
             .where(Run.id == run_id, _orphaned(at))
             .values(
-                status="running",
+                status=RunStatus.RUNNING.value,
                 lease_owner=owner,
                 lease_expires=at + seconds,
                 started_at=case((Run.started_at.is_(None), now()), else_=Run.started_at),
-                takeovers=case((Run.status == "running", Run.takeovers + 1), else_=Run.takeovers),
+                takeovers=case(
+                    (Run.status == RunStatus.RUNNING, Run.takeovers + 1), else_=Run.takeovers
+                ),
             )
         )
         return result.rowcount == 1
@@ -54,7 +58,7 @@ def owns(session: Session, run_id: int, owner: str, seconds: float) -> bool:
     """Renew the lease inside `session`'s transaction; False if this owner lost the run."""
     result = session.execute(
         update(Run)
-        .where(Run.id == run_id, Run.lease_owner == owner, Run.status == "running")
+        .where(Run.id == run_id, Run.lease_owner == owner, Run.status == RunStatus.RUNNING)
         .values(lease_expires=time.time() + seconds)
     )
     return result.rowcount == 1
@@ -70,6 +74,6 @@ def release_all(db: Database, owner: str) -> None:
     with db.write() as session:
         session.execute(
             update(Run)
-            .where(Run.lease_owner == owner, Run.status == "running")
+            .where(Run.lease_owner == owner, Run.status == RunStatus.RUNNING)
             .values(lease_owner=None, lease_expires=None)
         )

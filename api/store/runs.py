@@ -2,7 +2,7 @@
 
 ORM rows are turned into plain frozen values here (`RunRecord`, dicts of JSON-safe values), so
 no session or lazy attribute ever leaks into a route. The coordinator's own writes (leases,
-fitness, generation commits) live in `api.leases` and `api.coordinator`.
+fitness, generation commits) live beside this module, in `leases` and `driving`.
 """
 
 from __future__ import annotations
@@ -14,10 +14,11 @@ from typing import Any
 from sqlalchemy import func, select, update
 
 from softevo.api.db import Database
-from softevo.api.models import ACTIVE_STATUSES, Generation, Individual, Run, Sweep
+from softevo.api.models import Generation, Individual, Run, Sweep
 from softevo.core.config import RunConfig
 from softevo.core.ga.stats import CURVE_COLUMNS
 from softevo.core.nulls import to_null
+from softevo.core.status import ACTIVE, RunStatus
 
 
 def now() -> datetime:
@@ -46,7 +47,9 @@ def _make_room(session: Any, wanted: int, max_queued: int | None) -> None:
         return
     if session.get_bind().dialect.name == "postgresql":
         session.execute(select(func.pg_advisory_xact_lock(QUEUE_LOCK)))
-    queued = session.scalar(select(func.count()).select_from(Run).where(Run.status == "queued"))
+    queued = session.scalar(
+        select(func.count()).select_from(Run).where(Run.status == RunStatus.QUEUED)
+    )
     if queued + wanted > max_queued:
         raise QueueFullError(
             f"{queued} runs are waiting and {wanted} more would pass the bound of {max_queued} "
@@ -91,7 +94,7 @@ def _record(row: Run) -> RunRecord:
 
 def _new_run(config: RunConfig, sweep_id: int | None = None) -> Run:
     return Run(
-        sweep_id=sweep_id, status="queued", preset=config.preset, seed=config.seed,
+        sweep_id=sweep_id, status=RunStatus.QUEUED.value, preset=config.preset, seed=config.seed,
         config=config.to_json(), ga_state=None, generations_done=0,
         generations_total=config.generations, evaluations=0, saved=0, compute_seconds=0.0,
         created_at=now(), takeovers=0,
@@ -143,18 +146,21 @@ def list_runs(
 
 
 def cancel_run(db: Database, run_id: int) -> RunRecord:
-    """Queued or running -> cancelled, at once; results so far are kept. 409 otherwise."""
+    """Queued or running -> cancelled, at once; results so far are kept. 409 otherwise. One
+    conditional update: a run that completes at the same moment stays completed."""
+    active = [status.value for status in ACTIVE]
     with db.write() as session:
-        row = session.get(Run, run_id)
-        if row is None:
-            raise NotFoundError(f"run {run_id} not found")
-        if row.status not in ACTIVE_STATUSES:
-            raise ConflictError(f"run {run_id} is {row.status}; only queued or running runs cancel")
-        session.execute(
+        changed = session.execute(
             update(Run)
-            .where(Run.id == run_id)
-            .values(status="cancelled", finished_at=now(), lease_owner=None, lease_expires=None)
-        )
+            .where(Run.id == run_id, Run.status.in_(active))
+            .values(status=RunStatus.CANCELLED.value, finished_at=now(), lease_owner=None,
+                    lease_expires=None)
+        ).rowcount  # fmt: skip
+        if changed != 1:
+            status = session.scalar(select(Run.status).where(Run.id == run_id))
+            if status is None:
+                raise NotFoundError(f"run {run_id} not found")
+            raise ConflictError(f"run {run_id} is {status}; only queued or running runs cancel")
     return get_run(db, run_id)
 
 

@@ -1,0 +1,137 @@
+"""The store's contract, one suite on SQLite and on PostgreSQL (the `db` fixture runs both): runs
+queue and cancel only while active; a generation is kept once and a different one refused; a
+fitness is written once per individual; a commit is all or nothing; and a coordinator that lost
+its lease can write nothing."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from sqlalchemy import func, select
+from sqlalchemy.exc import IntegrityError
+
+from softevo.api import store
+from softevo.api.db import Database
+from softevo.api.models import Generation, Individual
+from softevo.api.store.driving import GenerationMismatchError, Lease, LeaseLostError
+from softevo.core.config import resolve
+from softevo.core.status import IndividualStatus, RunStatus
+
+REQUEST = {"preset": "quick", "population": 4, "generations": 2, "seed": 1}
+OWNER = Lease("owner-a", 30.0)
+
+
+def members(tag: str = "x") -> list[dict]:
+    return [
+        {"genome": {"discrete": [i], "real": []}, "genome_hash": f"{tag}{i}",
+         "operator": "random", "parents": []}
+        for i in range(4)
+    ]  # fmt: skip
+
+
+def driven(db: Database) -> int:
+    run = store.create_run(db, resolve(REQUEST))
+    assert store.leases.acquire(db, run.id, OWNER.owner, OWNER.seconds)
+    return run.id
+
+
+def statuses(db: Database, run_id: int) -> dict[int, tuple[str, float | None]]:
+    with db.read() as session:
+        rows = session.execute(
+            select(Individual.index, Individual.status, Individual.fitness).where(
+                Individual.run_id == run_id
+            )
+        )
+        return {index: (status, fitness) for index, status, fitness in rows}
+
+
+def test_a_generation_is_kept_once_and_a_different_one_refused(db: Database) -> None:
+    run_id = driven(db)
+    assert store.driving.keep_generation(db, run_id, OWNER, 0, members()) == {}
+    assert store.driving.keep_generation(db, run_id, OWNER, 0, members()) == {}  # again: same
+    assert len(statuses(db, run_id)) == 4
+    with pytest.raises(GenerationMismatchError, match="differs"):
+        store.driving.keep_generation(db, run_id, OWNER, 0, members("y"))
+
+
+def test_a_fitness_is_written_once_and_nan_is_failed_not_zero(db: Database) -> None:
+    run_id = driven(db)
+    store.driving.keep_generation(db, run_id, OWNER, 0, members())
+    store.driving.save_fitness(db, run_id, OWNER, 0, {0: 0.5, 1: math.nan}, "w1", 0.1)
+    store.driving.save_fitness(db, run_id, OWNER, 0, {0: 9.0, 2: 0.25}, "w2", 0.1)  # late twin
+    assert statuses(db, run_id) == {
+        0: (IndividualStatus.EVALUATED, 0.5),
+        1: (IndividualStatus.FAILED, None),
+        2: (IndividualStatus.EVALUATED, 0.25),
+        3: (IndividualStatus.PENDING, None),
+    }
+    # what a successor reads back: fitness saved, NaN for the failed one
+    known = store.driving.keep_generation(db, run_id, OWNER, 0, members())
+    assert known[0] == 0.5 and math.isnan(known[1]) and set(known) == {0, 1, 2}
+
+
+def commit(db: Database, run_id: int, lease: Lease, done: bool) -> None:
+    stats = {
+        "generation": 0, "best": 0.5, "mean": 0.3, "median": 0.3, "min": 0.1, "std": 0.1,
+        "best_so_far": 0.5, "diversity": 0.4, "size": 4, "failed": 0, "evaluations": 3,
+        "saved": 1,
+    }  # fmt: skip
+    store.driving.commit_generation(
+        db, run_id, lease, stats, {3: 0.1}, {"seed": 1}, (0.5, 0), done, 1.5
+    )
+
+
+def test_a_commit_writes_the_generation_counters_and_cached_fitness(db: Database) -> None:
+    run_id = driven(db)
+    store.driving.keep_generation(db, run_id, OWNER, 0, members())
+    commit(db, run_id, OWNER, done=True)
+    record = store.get_run(db, run_id)
+    assert record.status == RunStatus.COMPLETED and record.generations_done == 1
+    assert (record.evaluations, record.saved, record.best_fitness) == (3, 1, 0.5)
+    assert statuses(db, run_id)[3] == (IndividualStatus.CACHED, 0.1)
+    assert [row["generation"] for row in store.curve(db, run_id)] == [0]
+
+
+def test_a_commit_is_all_or_nothing(db: Database) -> None:
+    run_id = driven(db)
+    store.driving.keep_generation(db, run_id, OWNER, 0, members())
+    commit(db, run_id, OWNER, done=False)
+    with pytest.raises(IntegrityError):  # the same generation twice
+        commit(db, run_id, OWNER, done=True)
+    record = store.get_run(db, run_id)
+    assert record.status == RunStatus.RUNNING and record.evaluations == 3  # not 6
+    with db.read() as session:
+        assert session.scalar(select(func.count()).select_from(Generation)) == 1
+
+
+def test_a_coordinator_that_lost_its_lease_writes_nothing(db: Database) -> None:
+    run_id = driven(db)
+    store.driving.keep_generation(db, run_id, OWNER, 0, members())
+    store.leases.release_all(db, OWNER.owner)
+    successor = Lease("owner-b", 30.0)
+    assert store.leases.acquire(db, run_id, successor.owner, successor.seconds)
+    for write in (
+        lambda: store.driving.keep_generation(db, run_id, OWNER, 1, members("z")),
+        lambda: store.driving.save_fitness(db, run_id, OWNER, 0, {0: 1.0}, "old", 0.1),
+        lambda: commit(db, run_id, OWNER, done=True),
+    ):
+        with pytest.raises(LeaseLostError):
+            write()
+    assert statuses(db, run_id)[0] == (IndividualStatus.PENDING, None)
+    assert store.get_run(db, run_id).status == RunStatus.RUNNING
+
+
+def test_cancel_changes_only_an_active_run(db: Database) -> None:
+    queued = store.create_run(db, resolve(REQUEST))
+    assert store.cancel_run(db, queued.id).status == RunStatus.CANCELLED
+    with pytest.raises(store.ConflictError, match="is cancelled"):
+        store.cancel_run(db, queued.id)
+    run_id = driven(db)
+    store.driving.keep_generation(db, run_id, OWNER, 0, members())
+    commit(db, run_id, OWNER, done=True)
+    with pytest.raises(store.ConflictError, match="is completed"):
+        store.cancel_run(db, run_id)
+    assert store.get_run(db, run_id).status == RunStatus.COMPLETED
+    with pytest.raises(store.NotFoundError, match="run 999 not found"):
+        store.cancel_run(db, 999)
