@@ -178,6 +178,8 @@ class Coordinator:
         self._drivers: dict[int, tuple[RunDriver, threading.Thread]] = {}
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
+        self.ticks = 0  # scheduling rounds done: tests wait on them instead of sleeping
+        self._ticked = threading.Condition()
 
     # -- lifecycle -----------------------------------------------------------------------------
 
@@ -208,6 +210,21 @@ class Coordinator:
         if entry is not None:
             entry[0].stop("cancelled")
 
+    def join(self, run_id: int, timeout: float) -> bool:
+        """Wait until the run's driver has stopped (True), or `timeout` passes (False)."""
+        with self._lock:
+            entry = self._drivers.get(run_id)
+        if entry is not None:
+            entry[1].join(timeout)
+            return not entry[1].is_alive()
+        return True
+
+    def wait_ticks(self, rounds: int, timeout: float) -> bool:
+        """Wait until the scheduler has looked `rounds` more times (True) or `timeout` passes."""
+        with self._ticked:
+            target = self.ticks + rounds
+            return self._ticked.wait_for(lambda: self.ticks >= target, timeout)
+
     @property
     def active(self) -> list[int]:
         with self._lock:
@@ -225,6 +242,9 @@ class Coordinator:
                 self._schedule()
             except Exception:  # e.g. database away: retry at the next tick
                 log.exception("coordinator tick failed")
+            with self._ticked:
+                self.ticks += 1
+                self._ticked.notify_all()
             self._wake.wait(min(self.poll_seconds, self.lease_seconds / 3))
             self._wake.clear()
 

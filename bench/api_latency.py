@@ -22,8 +22,6 @@ import argparse
 import contextlib
 import os
 import platform
-import subprocess
-import sys
 import tempfile
 import time
 from collections.abc import Callable, Iterator
@@ -31,11 +29,12 @@ from pathlib import Path
 
 import httpx
 import numpy as np
-from benchlib import cpu_model, free_port
+from benchlib import cpu_model
 from sqlalchemy import create_engine, text
 from sqlalchemy.engine import make_url
 
 from softevo.api.db import Database, normalise_url, scratch_postgres
+from softevo.local_service import service_env, start_service
 
 DEFAULT_POSTGRES = os.environ.get(
     "SOFTEVO_TEST_POSTGRES", "postgresql://postgres@127.0.0.1:5432/test"
@@ -75,43 +74,11 @@ def postgres_database(server_url: str) -> Iterator[str]:
 @contextlib.contextmanager
 def serve(database_url: str, workdir: Path) -> Iterator[str]:
     """`softevo serve` on a free port with this database; yields its base URL."""
-    port = free_port()
     # The default settings (no token, one pool process per core), whatever this shell sets.
-    env = {k: v for k, v in os.environ.items() if not k.startswith("SOFTEVO_")}
-    env["SOFTEVO_DATABASE_URL"] = database_url
-    log_path = workdir / f"serve-{port}.log"
-    command = [sys.executable, "-P", "-m", "softevo.cli", "serve", "--port", str(port)]
-    with log_path.open("w") as log:
-        process = subprocess.Popen(
-            [*command, "--log-level", "warning"],
-            cwd=workdir,
-            env=env,
-            stdout=log,
-            stderr=subprocess.STDOUT,
-        )
-    base = f"http://127.0.0.1:{port}"
-    try:
-        deadline = time.monotonic() + 60
-        while True:
-            if process.poll() is not None:
-                raise RuntimeError(f"softevo serve exited ({process.returncode}):\n"
-                                   + log_path.read_text()[-2000:])  # fmt: skip
-            try:
-                if httpx.get(f"{base}/healthz", timeout=1).status_code == 200:
-                    break
-            except httpx.TransportError:
-                pass
-            if time.monotonic() > deadline:
-                raise RuntimeError("softevo serve did not answer /healthz in 60 s")
-            time.sleep(0.1)
-        yield base
-    finally:
-        process.terminate()  # uvicorn shuts down gracefully: the run's lease is handed back
-        try:
-            process.wait(30)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait()
+    env = service_env(database_url=database_url)
+    log = workdir / f"serve-{database_url.split(':')[0]}.log"
+    with start_service(env, log, "--log-level", "warning", cwd=workdir) as local:
+        yield local.url  # stopped gracefully after: the run's lease is handed back
 
 
 def run_to_completion(client: httpx.Client) -> tuple[int, float, dict]:

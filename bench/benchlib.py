@@ -5,10 +5,11 @@ from __future__ import annotations
 
 import os
 import platform
-import socket
 import subprocess
 import time
 from pathlib import Path
+
+from softevo.local_service import free_port  # noqa: F401 - the benches' one free_port
 
 
 def cpu_model() -> str:
@@ -71,9 +72,3 @@ class OtherLoad:
         wall = time.perf_counter() - self.started
         other = (self._busy() - self.busy) - (self._mine() - self.mine)
         return max(0.0, other / wall)
-
-
-def free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]

@@ -67,6 +67,7 @@ from softevo.core.ga.stats import CURVE_COLUMNS
 from softevo.core.robot import VoxelRobot
 from softevo.core.robot_file import robot_to_json
 from softevo.core.settings import sim_settings
+from softevo.local_service import start_service
 from softevo.worker.queue import connect
 
 WORKERS = 2
@@ -162,21 +163,10 @@ def start_workers(processes: Processes, url: str, worker_class: str) -> None:
 
 def serve(processes: Processes, name: str, env: dict[str, str]) -> tuple[str, int]:
     """`softevo serve` on a free port; its base URL once /healthz answers, and its pid."""
-    port = free_port()
-    command = [sys.executable, "-P", "-m", "softevo.cli", "serve", "--port", str(port)]
-    process = processes.start(name, [*command, "--log-level", "warning"], env)
-    base = f"http://127.0.0.1:{port}"
-    deadline = time.monotonic() + 60
-    while True:
-        processes.check()
-        try:
-            if httpx.get(f"{base}/healthz", timeout=1).status_code == 200:
-                return base, process.pid
-        except httpx.TransportError:
-            pass
-        if time.monotonic() > deadline:
-            raise RuntimeError(f"{name} did not answer /healthz in 60 s")
-        time.sleep(0.1)
+    log = processes.workdir / f"{name}.log"
+    local = start_service(env, log, "--log-level", "warning", cwd=processes.workdir)
+    processes.running.append((name, local.process))
+    return local.url, local.process.pid
 
 
 def run_to_completion(client: httpx.Client, request: dict[str, Any]) -> tuple[int, float, dict]:

@@ -56,6 +56,18 @@ def _request(args: argparse.Namespace) -> dict[str, Any]:
     return request
 
 
+def _writable(args: argparse.Namespace, out: Path) -> Path:
+    """`out`, made; an unwritable folder is refused before anything runs."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / ".write-test"
+        probe.write_text("")
+        probe.unlink()
+    except OSError as error:
+        args.parser.error(f"--out {out}: cannot write ({error.strerror})")
+    return out
+
+
 def run_command(args: argparse.Namespace) -> int:
     try:
         config = resolve(_request(args))
@@ -63,14 +75,7 @@ def run_command(args: argparse.Namespace) -> int:
         args.parser.error(str(error))
     if args.workers is not None and args.workers < 1:
         args.parser.error(f"--workers must be >= 1, got {args.workers}")
-    out = Path(args.out or f"softevo-runs/{config.preset}-seed{config.seed}")
-    try:  # refuse an unwritable folder before anything runs
-        out.mkdir(parents=True, exist_ok=True)
-        probe = out / ".write-test"
-        probe.write_text("")
-        probe.unlink()
-    except OSError as error:
-        args.parser.error(f"--out {out}: cannot write ({error.strerror})")
+    out = _writable(args, Path(args.out or f"softevo-runs/{config.preset}-seed{config.seed}"))
     from softevo.core.evaluation import make_evaluator  # the physics: loaded only to run
 
     console = Console(stderr=True)
@@ -112,7 +117,12 @@ def run_command(args: argparse.Namespace) -> int:
     _, curve, individuals = read_results(out)
     title = f"{'x'.join(map(str, config.shape))}, seed {config.seed}"
     figures.run_figures(curve, individuals, out, title)
-    result = summary(evolution)
+    _print_summary(args, evolution, out)
+    return 0
+
+
+def _print_summary(args: argparse.Namespace, evolution: Evolution, out: Path) -> None:
+    config, result = evolution.config, summary(evolution)
     if args.json:
         print(json.dumps({**result, "out": str(out)}, allow_nan=False))
     else:
@@ -125,4 +135,3 @@ def run_command(args: argparse.Namespace) -> int:
             f"{result['wall_seconds']:.1f} s\nresults in {out}/",
             file=sys.stdout,
         )
-    return 0

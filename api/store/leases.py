@@ -28,15 +28,17 @@ def _orphaned(at: float):  # type: ignore[no-untyped-def]
     )
 
 
-def candidates(db: Database, limit: int) -> list[int]:
+def candidates(db: Database, limit: int, at: float | None = None) -> list[int]:
     """Runs waiting for a coordinator: queued ones, and running ones whose lease expired."""
     with db.read() as session:
-        query = select(Run.id).where(_orphaned(time.time())).order_by(Run.id).limit(limit)
+        when = time.time() if at is None else at
+        query = select(Run.id).where(_orphaned(when)).order_by(Run.id).limit(limit)
         return list(session.scalars(query))
 
 
-def acquire(db: Database, run_id: int, owner: str, seconds: float) -> bool:
-    at = time.time()
+def acquire(db: Database, run_id: int, owner: str, seconds: float, at: float | None = None) -> bool:
+    """Take the run if it is queued or its lease has expired (by `at`, unix time; default now)."""
+    at = time.time() if at is None else at
     with db.write() as session:
         result = session.execute(
             update(Run)

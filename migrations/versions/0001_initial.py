@@ -19,6 +19,11 @@ TZ = sa.DateTime(timezone=True)
 
 
 def upgrade() -> None:
+    _sweeps_and_runs()
+    _generations_and_individuals()
+
+
+def _sweeps_and_runs() -> None:
     op.create_table(
         "sweeps",
         sa.Column("id", sa.Integer, primary_key=True),
@@ -51,6 +56,9 @@ def upgrade() -> None:
     )
     op.create_index("ix_runs_status", "runs", ["status"])
     op.create_index("ix_runs_sweep_id", "runs", ["sweep_id"])
+
+
+def _generations_and_individuals() -> None:
     op.create_table(
         "generations",
         sa.Column("id", sa.Integer, primary_key=True),

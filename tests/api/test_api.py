@@ -174,7 +174,8 @@ def test_cancel_stops_at_once_and_keeps_results(client: TestClient) -> None:
     cancelled = client.post(f"/runs/{run_id}/cancel")
     assert cancelled.status_code == 200 and cancelled.json()["status"] == "cancelled"
     committed = len(client.get(f"/runs/{run_id}/curve").json()["generations"])
-    time.sleep(1.0)
+    coordinator = client.app.state.coordinator  # type: ignore[attr-defined]
+    assert coordinator.join(run_id, 30)  # its driver has stopped: nothing more can be written
     after = client.get(f"/runs/{run_id}").json()
     assert after["status"] == "cancelled" and committed >= 1
     assert len(client.get(f"/runs/{run_id}/curve").json()["generations"]) == committed
@@ -190,7 +191,8 @@ def test_runs_beyond_the_bound_wait_queued(make_client: Callable[..., TestClient
     while client.get(f"/runs/{first}").json()["status"] != "running":
         assert time.monotonic() < deadline
         time.sleep(0.05)
-    time.sleep(0.5)
+    coordinator = client.app.state.coordinator  # type: ignore[attr-defined]
+    assert coordinator.wait_ticks(3, 30)  # the scheduler looked again, and again left it waiting
     assert client.get(f"/runs/{second}").json()["status"] == "queued"
     assert client.get("/healthz").json()["coordinator"]["driving"] == [first]
     client.post(f"/runs/{first}/cancel")

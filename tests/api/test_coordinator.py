@@ -77,8 +77,9 @@ def test_lease_is_exclusive_until_it_expires(db: Database) -> None:
     assert not store.leases.acquire(db, run.id, "b", 0.5)
     assert store.leases.candidates(db, 10) == []
     assert store.leases.renew(db, run.id, "a", 0.5)
-    time.sleep(0.6)
-    assert store.leases.acquire(db, run.id, "b", 5)
+    later = time.time() + 0.6  # a clock past the lease's end, not a sleep
+    assert store.leases.candidates(db, 10, at=later) == [run.id]
+    assert store.leases.acquire(db, run.id, "b", 5, at=later)
     assert not store.leases.renew(db, run.id, "a", 5)  # the old owner is fenced off
     record = store.get_run(db, run.id)
     assert record.status == "running" and record.takeovers == 1
@@ -115,7 +116,6 @@ def test_takeover_after_a_coordinator_freezes_gives_the_undisturbed_curve(db: Da
     try:
         assert wait_status(db, run.id, ("completed", "failed")) == "completed"
         frozen.release.set()  # its late batch must not write a second fitness
-        time.sleep(0.5)
     finally:
         second.stop()
         first.stop()

@@ -9,9 +9,6 @@ from __future__ import annotations
 import os
 import random
 import signal
-import socket
-import subprocess
-import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -25,6 +22,7 @@ from softevo.api.db import Database, normalise_url
 from softevo.core.config import resolve
 from softevo.core.evaluation import SerialEvaluator
 from softevo.core.evolution import CURVE_COLUMNS, Evolution
+from softevo.local_service import LocalService, ServiceError, start_service
 
 #: 3x3x3 robots simulated for 20 s: a batch of two takes ~0.2 s, so a generation (about eight new
 #: robots, four batches) lasts long enough to be caught between its first and last batch.
@@ -43,27 +41,19 @@ KILL_AT = 2
 LEASE_SECONDS = 2.0
 
 
-def _free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return int(probe.getsockname()[1])
-
-
 class Server:
     """One `softevo serve` process and a client for it; its output goes to a log file."""
 
-    def __init__(self, process: subprocess.Popen[bytes], url: str, log: Path) -> None:
-        self.process = process
-        self.client = httpx.Client(base_url=url, timeout=10.0)
-        self.log = log
+    def __init__(self, local: LocalService) -> None:
+        self.local = local
+        self.process = local.process
+        self.client = httpx.Client(base_url=local.url, timeout=10.0)
 
     def tail(self) -> str:
-        return self.log.read_text(errors="replace")[-4000:]
+        return self.local.tail()
 
     def kill(self) -> None:
-        if self.process.poll() is None:
-            os.kill(self.process.pid, signal.SIGKILL)
-        self.process.wait(timeout=10)
+        self.local.kill()
         self.client.close()
 
 
@@ -86,28 +76,10 @@ def serve(database_url: str, log: Path) -> Server:
         "SOFTEVO_WORKERS": "1",
         "SOFTEVO_BATCH_SIZE": "2",
     }
-    port = _free_port()
-    with log.open("wb") as out:
-        process = subprocess.Popen(
-            [sys.executable, "-P", "-m", "softevo.cli", "serve", "--port", str(port)],
-            env=env,
-            stdout=out,
-            stderr=subprocess.STDOUT,
-        )
-    server = Server(process, f"http://127.0.0.1:{port}", log)
-    deadline = time.monotonic() + 60
-    while True:
-        if process.poll() is not None:
-            pytest.fail(f"softevo serve exited with {process.returncode}:\n{server.tail()}")
-        try:
-            if server.client.get("/healthz").status_code == 200:
-                return server
-        except httpx.TransportError:
-            pass
-        if time.monotonic() > deadline:
-            server.kill()
-            pytest.fail(f"softevo serve did not answer /healthz in 60 s:\n{server.tail()}")
-        time.sleep(0.1)
+    try:
+        return Server(start_service(env, log))
+    except ServiceError as error:
+        pytest.fail(str(error))
 
 
 @pytest.fixture

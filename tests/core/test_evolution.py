@@ -73,18 +73,3 @@ def test_evolution_beats_random_search_on_the_same_budget(pool) -> None:
         ratios.append(evolution.best_robot()[1] / np.nanmax(pool.evaluate_batch(randoms).fitness))
     assert np.mean(ratios) > 1.1, ratios
     assert sum(r > 1 for r in ratios) >= 4, ratios
-
-
-def test_pool_rebuilds_itself_after_a_worker_process_is_killed() -> None:
-    import os
-    import signal
-
-    evolution = Evolution.start(resolve({**SMALL, "seed": 3}))
-    files = [robot_to_json(evolution.robot(item)) for item in evolution.individuals()]
-    expected = SerialEvaluator().evaluate_batch(files).fitness
-    with PoolEvaluator(2) as evaluator:
-        assert np.array_equal(evaluator.evaluate_batch(files).fitness, expected, equal_nan=True)
-        victim = next(iter(evaluator._pool._processes))  # a live pool process
-        os.kill(victim, signal.SIGKILL)
-        assert np.array_equal(evaluator.evaluate_batch(files).fitness, expected, equal_nan=True)
-        assert victim not in evaluator._pool._processes

@@ -1,4 +1,5 @@
-"""`softevo run` as a user runs it: a subprocess, its files and its JSON."""
+"""`softevo run` as a user runs it: `main(argv)` in process (a real process where Ctrl-C is the
+point), its files and its JSON."""
 
 from __future__ import annotations
 
@@ -12,11 +13,7 @@ import time
 from pathlib import Path
 
 from softevo.core.robot_file import load_robot
-
-
-def softevo(*args: str) -> subprocess.CompletedProcess[str]:
-    command = [sys.executable, "-P", "-m", "softevo.cli", *args]
-    return subprocess.run(command, capture_output=True, text=True, timeout=600, check=False)
+from tests.softevo.inprocess import softevo
 
 
 def test_run_writes_results_and_prints_json(tmp_path: Path) -> None:

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.dashboard.live import serve, wait
+from tests.api.dashboard.live import serve, wait
 
 pytestmark = pytest.mark.slow
 KINDS = ("curve", "population", "diversity")

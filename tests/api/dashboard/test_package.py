@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 def test_every_static_file_is_package_data() -> None:
@@ -33,6 +33,18 @@ def test_every_static_file_is_package_data() -> None:
         if not any(fnmatch.fnmatch(f, p) and f.count("/") == p.count("/") for p in patterns)
     ]
     assert unshipped == []
+
+
+def test_every_package_folder_is_listed_for_the_install() -> None:
+    """pyproject maps the top-level folders under `softevo`, so its package list is explicit:
+    every folder with an __init__.py must be on it (or the install silently lacks it)."""
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    folders = {
+        installed_name(init.parent / "x.py").removesuffix("/x.py").replace("/", ".")
+        for top in ("core", "api", "worker", "softevo", "migrations")
+        for init in (ROOT / top).rglob("__init__.py")
+    }
+    assert folders == set(config["packages"])
 
 
 def test_vendored_libraries_carry_their_licences() -> None:

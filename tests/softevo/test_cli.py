@@ -1,26 +1,14 @@
-"""The `softevo` command as a user runs it: a real subprocess, real files, its output parsed."""
+"""The `softevo` command as a user runs it: `main(argv)` in process, real files, output parsed."""
 
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from softevo.core.robot_file import load_robot
-
-
-def softevo(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-P", "-m", "softevo.cli", *args],
-        capture_output=True,
-        text=True,
-        cwd=cwd,
-        timeout=300,
-        check=False,
-    )
+from tests.softevo.inprocess import softevo
 
 
 def test_help_lists_simulate() -> None:

@@ -12,10 +12,10 @@ from typing import Any
 import httpx
 import pytest
 
-from tests.dashboard.live import serve, wait
+from tests.api.dashboard.live import serve, wait
 
 pytestmark = [pytest.mark.browser, pytest.mark.slow]
-ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"
+ARTIFACTS = Path(__file__).resolve().parents[3] / "test-artifacts"
 SMALL = {
     "preset": "quick",
     "seed": 2,

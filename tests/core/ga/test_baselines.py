@@ -9,7 +9,7 @@ import pytest
 
 from softevo.core.config import ConfigError, resolve
 from softevo.core.ga.algorithm import GAState
-from tests.core.test_algorithm import Held, make, run, toy_fitness
+from tests.core.ga.test_algorithm import Held, make, run, toy_fitness
 
 
 @pytest.mark.parametrize("algorithm", ["random", "hillclimb"])

@@ -1,0 +1,155 @@
+// One run, live: its curve, population dot plot, diversity and the 3D replay of the best robot.
+import { CURVE_SERIES, GENERATION_AXIS, api, box, chart, fmt, h, onLeave, progressBar, softevo, status, view } from "./api.js";
+import { Replay } from "./replay.js";
+import { cancelButton } from "./runs.js";
+
+export async function runView(runId) {
+  softevo.view = "run";
+  softevo.replay = softevo.dots = softevo.failedDots = null;  // nothing of the last view's
+  let run = await api(`/runs/${runId}`);
+  const population = run.config.population;
+  const summary = h("div", { id: "summary" });
+  const charts = h("div", { class: "grid" });
+  const replayPanel = h("div", { class: "panel", id: "replay" });
+  const settings = h("pre", { class: "settings" }, JSON.stringify(run.config, null, 2));
+  view.replaceChildren(
+    h("h2", {}, `Run #${runId}`, " ", h("span", { class: "muted" }, `${run.preset || "custom"}, ${box(run.config.shape)}, seed ${run.seed}`)),
+    summary, charts,
+    h("div", { class: "grid" }, replayPanel,
+      h("div", { class: "panel" }, h("h3", {}, "Settings"), settings)));
+
+  const showSummary = () => summary.replaceChildren(h("div", { class: "panel" },
+    status(run.status), " ", progressBar(run.progress.generation, run.progress.generations),
+    ` best ${fmt(run.progress.best_fitness)} m/s`,
+    run.progress.best_generation !== null ? ` (generation ${run.progress.best_generation})` : "",
+    `, ${run.progress.evaluations} simulations, ${run.progress.saved} from the cache`,
+    run.progress.eta_seconds ? `, about ${Math.round(run.progress.eta_seconds)} s left` : "",
+    run.error ? h("div", { class: "error" }, run.error) : "",
+    " ", ["queued", "running"].includes(run.status) ? cancelButton(runId, async () => { run = await api(`/runs/${runId}`); showSummary(); }) : "",
+    h("div", { class: "links" },
+      h("a", { href: `/runs/${runId}/curve?format=csv` }, "curve (CSV)"),
+      h("a", { href: `/runs/${runId}/best` }, "best robot file"),
+      h("a", { href: `/runs/${runId}/figures/curve.png` }, "curve (PNG)"),
+      h("a", { href: `/runs/${runId}/figures/population.png` }, "population (PNG)"),
+      h("a", { href: `/runs/${runId}/figures/diversity.png` }, "diversity (PNG)"),
+      run.sweep_id ? h("a", { href: `#/sweeps/${run.sweep_id}` }, `sweep ${run.sweep_id}`) : "")));
+  showSummary();
+
+  // the data the charts draw, grown generation by generation
+  let curve = (await api(`/runs/${runId}/curve`)).generations;
+  const individuals = [];
+  // committed generations only, in pages of 5000 in (generation, index) order: a long run opens
+  // in a few requests, not one per generation
+  async function loadGenerations() {
+    const committed = curve.length ? curve[curve.length - 1].generation : -1;
+    while (individuals.length < (committed + 1) * population) {
+      const page = await api(`/runs/${runId}/individuals?offset=${individuals.length}&limit=5000`);
+      const items = page.items.filter((item) => item.generation <= committed);
+      individuals.push(...items);
+      if (items.length < page.items.length || page.items.length === 0) break;
+    }
+  }
+  await loadGenerations();
+
+  const curveData = () => [curve.map((r) => r.generation), ...CURVE_SERIES.map((s) => curve.map((r) => r[s.key]))];
+  const curvePlot = chart("curve", "Learning curve (m/s)", {
+    scales: { x: { time: false } },
+    axes: [GENERATION_AXIS, { label: "speed (m/s)", size: 60 }],
+    series: [{ label: "generation" }, ...CURVE_SERIES.map((s) => ({ label: s.label, stroke: s.stroke, width: s.width || 1.5, dash: s.dash }))],
+  }, curveData(), charts);
+
+  // population dot plot: x = generation, spread a little by index; failed ones in red at 0
+  const dotData = () => {
+    const x = [], ok = [], failed = [];
+    for (const item of individuals) {
+      x.push(item.generation + (item.index / population - 0.5) * 0.7);
+      ok.push(item.fitness === null ? null : item.fitness);
+      // failed: no speed, whether simulated in this generation or reused from the cache
+      failed.push(item.fitness === null ? 0 : null);
+    }
+    softevo.dots = individuals.length;
+    softevo.failedDots = individuals.filter((i) => i.fitness === null).length;
+    return [x, ok, failed];
+  };
+  const dotPlot = chart("population", "Population: every individual (click one to replay it)", {
+    scales: { x: { time: false, range: (u, min, max) => [Math.round(min) - 0.6, Math.round(max) + 0.6] } },
+    cursor: { drag: { x: false, y: false } },
+    axes: [GENERATION_AXIS, { label: "speed (m/s)", size: 60 }],
+    series: [{ label: "generation", value: (u, v) => (v === null ? "–" : Math.round(v)) },
+      { label: "speed", stroke: "#2f6fb5", paths: () => null, points: { show: true, size: 4, fill: "#2f6fb5" } },
+      { label: "failed", stroke: "#c0392b", paths: () => null, points: { show: true, size: 6, fill: "#c0392b" } }],
+  }, dotData(), charts);
+  // capture phase on the root: uPlot stops the click's propagation on its plotting area
+  dotPlot.root.addEventListener("click", (event) => {
+    const rect = dotPlot.over.getBoundingClientRect();
+    const px = event.clientX - rect.left, py = event.clientY - rect.top;
+    let best = null, bestDistance = 12 * 12;
+    dotPlot.data[0].forEach((xv, i) => {
+      const yv = dotPlot.data[1][i] ?? dotPlot.data[2][i];
+      if (yv === null || yv === undefined) return;
+      const dx = dotPlot.valToPos(xv, "x") - px, dy = dotPlot.valToPos(yv, "y") - py;
+      if (dx * dx + dy * dy < bestDistance) { bestDistance = dx * dx + dy * dy; best = individuals[i]; }
+    });
+    if (!best) return;
+    replay.best = null;  // a picked individual stays on screen while the run goes on
+    replay.load(`/runs/${runId}/individuals/${best.id}/replay`,
+      () => `individual ${best.id} (generation ${best.generation}, ${best.operator}, ${best.fitness === null ? "failed" : `${fmt(best.fitness)} m/s`})`)
+      .catch((error) => replayPanel.append(h("p", { class: "error" }, error.message)));
+  }, true);
+
+  const diversityPlot = chart("diversity", "Diversity", {
+    scales: { x: { time: false }, y: { range: (u, min, max) => [0, Math.max(max, 0.01)] } },
+    axes: [GENERATION_AXIS, { label: "diversity", size: 60 }],
+    series: [{ label: "generation" }, { label: "diversity", stroke: "#8e44ad", width: 1.5 }],
+  }, [curve.map((r) => r.generation), curve.map((r) => r.diversity)], charts);
+
+  const replay = new Replay(replayPanel);
+  onLeave(() => replay.dispose());
+  const showBest = async () => {
+    const label = ["completed", "failed", "cancelled"].includes(run.status) ? "the fastest robot" : "the fastest robot so far";
+    // named from the replay itself: a better robot may have been committed since `run` was read
+    const data = await replay.load(`/runs/${runId}/best/replay`, (d) => `${label} (generation ${d.generation})`);
+    replay.best = data.generation;
+  };
+  if (run.progress.best_fitness !== null) {
+    await showBest();
+  } else {
+    replayPanel.append(h("p", { class: "muted" }, "The replay appears once a generation is done."));
+  }
+
+  // live: one server-sent event per committed generation, then `end`
+  if (!["completed", "failed", "cancelled"].includes(run.status)) {
+    const events = new EventSource(`/runs/${runId}/events`);
+    onLeave(() => events.close());
+    const update = async () => {
+      run = await api(`/runs/${runId}`);
+      curve = (await api(`/runs/${runId}/curve`)).generations;
+      await loadGenerations();
+      curvePlot.setData(curveData());
+      dotPlot.setData(dotData());
+      diversityPlot.setData([curve.map((r) => r.generation), curve.map((r) => r.diversity)]);
+      showSummary();
+      // follow the fastest robot as it changes, unless the user picked an individual
+      const stale = !replay.loaded || (replay.best !== null && replay.best !== run.progress.best_generation);
+      if (stale && run.progress.best_fitness !== null) {
+        replayPanel.querySelector("p.muted")?.remove();
+        await showBest();
+      }
+    };
+    // events come in bursts (a reconnect replays every generation): redraw at most twice a second
+    let dirty = false, busy = false;
+    const timer = setInterval(async () => {
+      if (!dirty || busy) return;
+      dirty = false;
+      busy = true;
+      try { await update(); } catch (error) { /* the next event retries */ }
+      busy = false;
+    }, 500);
+    onLeave(() => clearInterval(timer));
+    const queue = () => { dirty = true; };
+    events.addEventListener("generation", queue);
+    events.addEventListener("status", queue);
+    events.addEventListener("end", () => { events.close(); queue(); });
+  }
+}
+

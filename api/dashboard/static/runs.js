@@ -1,0 +1,69 @@
+// The list of runs: status, progress, best speed; start one from a preset, cancel one.
+import { api, box, fmt, h, onLeave, progressBar, softevo, status, view } from "./api.js";
+
+export async function runsView() {
+  softevo.view = "runs";
+  const presets = await api("/presets");
+  const message = h("span", { class: "muted", id: "start-message" });
+  const form = h("form", { class: "start", id: "start-form" },
+    h("label", {}, "preset", h("select", { name: "preset" },
+      presets.map((p) => h("option", { value: p.name, title: p.description }, p.name)))),
+    h("label", {}, "bounding box", h("input", { name: "shape", placeholder: "e.g. 5x5x3", size: 8 })),
+    h("label", {}, "seed", h("input", { name: "seed", type: "number", value: 1, min: 0 })),
+    h("label", {}, "population", h("input", { name: "population", type: "number", min: 2, placeholder: "preset" })),
+    h("label", {}, "generations", h("input", { name: "generations", type: "number", min: 1, placeholder: "preset" })),
+    h("button", { class: "primary", type: "submit" }, "Start run"), message);
+  form.addEventListener("submit", async (event) => {
+    event.preventDefault();
+    const data = new FormData(form);
+    const request = { preset: data.get("preset"), seed: Number(data.get("seed") || 0) };
+    const shape = String(data.get("shape") || "").trim();
+    if (shape) request.shape = shape.toLowerCase().split("x").map(Number);
+    for (const key of ["population", "generations"]) if (data.get(key)) request[key] = Number(data.get(key));
+    try {
+      const run = await api("/runs", { method: "POST", body: JSON.stringify(request) });
+      message.className = "muted";
+      message.textContent = `run ${run.id} queued`;
+      await refresh();
+    } catch (error) {
+      message.className = "error";
+      message.textContent = error.message;
+    }
+  });
+  const table = h("table", { id: "runs" });
+  view.replaceChildren(
+    h("div", { class: "panel" }, h("h3", {}, "Start a run"), form),
+    h("div", { class: "panel" }, h("h3", {}, "Runs"), table));
+
+  async function refresh() {
+    const page = await api("/runs?limit=100");
+    table.replaceChildren(
+      h("tr", {}, ["run", "status", "progress", "best speed (m/s)", "preset", "box", "seed", "sweep", ""].map((t) => h("th", {}, t))),
+      ...page.items.map((run) => h("tr", { "data-run": run.id },
+        h("td", {}, h("a", { href: `#/runs/${run.id}` }, `#${run.id}`)),
+        h("td", {}, status(run.status)),
+        h("td", {}, progressBar(run.progress.generation, run.progress.generations)),
+        h("td", { class: "num" }, fmt(run.progress.best_fitness)),
+        h("td", {}, run.preset || "–"),
+        h("td", {}, box(run.config.shape)),
+        h("td", { class: "num" }, run.seed),
+        h("td", {}, run.sweep_id ? h("a", { href: `#/sweeps/${run.sweep_id}` }, `sweep ${run.sweep_id}`) : "–"),
+        h("td", {}, ["queued", "running"].includes(run.status) ? cancelButton(run.id, refresh) : ""))));
+    if (!page.items.length) table.append(h("tr", {}, h("td", { colspan: 9, class: "muted" }, "No runs yet: start one above.")));
+  }
+  await refresh();
+  const timer = setInterval(() => refresh().catch(() => {}), 2000);
+  onLeave(() => clearInterval(timer));
+}
+
+export function cancelButton(runId, after) {
+  return h("button", {
+    onclick: async (event) => {
+      event.target.disabled = true;
+      try { await api(`/runs/${runId}/cancel`, { method: "POST" }); }
+      catch (error) { alert(error.message); }
+      await after();
+    },
+  }, "Cancel");
+}
+

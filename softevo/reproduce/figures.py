@@ -1,0 +1,174 @@
+"""The reproduction's figures: the paper's Figure 4(a)-(d) and the comparisons past it."""
+
+from __future__ import annotations
+
+import math
+import statistics
+from pathlib import Path
+from typing import Any
+
+from softevo.core import figures
+from softevo.reproduce.experiments import Experiments, Group
+from softevo.reproduce.plan import CLOCK
+
+
+def _bars(groups: list[Group], labels: list[str], title: str, path: Path) -> None:
+    plt = figures.pyplot()
+    figure, axes = plt.subplots(figsize=(6.5, 3.4))
+    for x, group in enumerate(groups):
+        best = [r["progress"]["best_fitness"] or 0.0 for r in group.runs]
+        if best:
+            axes.bar(x, statistics.fmean(best), color="tab:blue", alpha=0.6)
+            axes.scatter([x] * len(best), best, color="black", s=10, zorder=3)
+    axes.set_xticks(range(len(groups)), labels, rotation=30, ha="right")
+    axes.set_ylabel("best speed (m/s)")
+    axes.set_title(title)
+    figure.tight_layout()
+    figures.save(figure, path)
+
+
+def _paired(
+    experiments: Experiments,
+    shapes: list[tuple[int, int, int]],
+    other: tuple[str, str],
+    names: tuple[str, str],
+    title: str,
+    path: Path,
+) -> None:
+    """Bars per box: the paper-voxel sweep's box, then `other`'s (experiment, variant)."""
+    pairs = []
+    for shape in shapes:
+        pairs += [
+            experiments.group("boxes", "paper-voxel", shape),
+            experiments.group(*other, shape),
+        ]
+    labels = [
+        f"{'x'.join(map(str, g.shape))} {names[0] if g.experiment == 'boxes' else names[1]}"
+        for g in pairs
+    ]
+    _bars(pairs, labels, title, path)
+
+
+def write_figures(experiments: Experiments, out: Path) -> dict[str, Any]:
+    """Every figure; which run Figure 4(b)-(d) show."""
+    shown = _figure4(experiments, out)
+    _past_the_paper(experiments, out)
+    return shown
+
+
+def _figure4(experiments: Experiments, out: Path) -> dict[str, Any]:
+    """Figure 4(a), and (b)-(d) for the best run of the box with the best mean."""
+    boxes = [experiments.group("boxes", "paper-voxel", s) for s in experiments.plan.boxes]
+    _bars(
+        boxes,
+        ["x".join(map(str, g.shape)) for g in boxes],
+        "Figure 4(a): best speed per bounding box (bars: mean, dots: seeds)",
+        out / "fig4a_boxes.png",
+    )
+    best_box = max(boxes, key=lambda g: g.row()["best_mean"] or -math.inf)
+    best_run = max(best_box.runs, key=lambda r: r["progress"]["best_fitness"] or -math.inf)
+    title = f"{'x'.join(map(str, best_box.shape))}, seed {best_run['seed']}"
+    curve = experiments.curve(best_run["id"])
+    individuals = experiments.individuals(best_run["id"])
+    figures.save(
+        figures.curve_figure(curve, f"Figure 4(b): learning curve, {title}"),
+        out / "fig4b_curve.png",
+    )
+    figures.save(
+        figures.population_figure(individuals, f"Figure 4(c): population, {title}"),
+        out / "fig4c_population.png",
+    )
+    figures.save(
+        figures.diversity_figure(curve, f"Figure 4(d): diversity, {title}"),
+        out / "fig4d_diversity.png",
+    )
+    return {
+        "figure4_run": best_run["id"],
+        "figure4_box": best_box.shape,
+        "figure4_seed": best_run["seed"],
+    }
+
+
+def _past_the_paper(experiments: Experiments, out: Path) -> None:
+    """Phase 2, the baselines, the encodings, the faster clock and the ablation."""
+    plan = experiments.plan
+    cube = experiments.group("phase 2", "paper-cube", (1, 1, 1))
+    _curves(
+        experiments,
+        [("paper-cube", cube)],
+        "phase 2: the cube's learning curves",
+        out / "phase2_cube.png",
+        by="generation",
+    )
+    baselines = [(g.variant, g) for g in experiments.groups if g.experiment == "baselines"]
+    _curves(
+        experiments,
+        baselines,
+        f"GA against baselines, {'x'.join(map(str, plan.focus))}: best so far",
+        out / "baselines.png",
+        by="evaluations",
+    )
+    _paired(
+        experiments,
+        plan.encoding_boxes,
+        ("encodings", "spring"),
+        ("voxel", "spring"),
+        "voxel against spring encoding (bars: mean, dots: seeds)",
+        out / "encodings.png",
+    )
+    _paired(
+        experiments,
+        plan.boxes,
+        CLOCK,
+        ("1 rad/s", "2 pi"),
+        "the boxes at the paper's actuation (1 rad/s) and at 2 pi rad/s",
+        out / "clock.png",
+    )
+    ablation = [g for g in experiments.groups if g.experiment == "ablation"]
+    _bars(
+        ablation,
+        [g.variant for g in ablation],
+        f"ablation, {'x'.join(map(str, plan.focus))}",
+        out / "ablation.png",
+    )
+    _curves(
+        experiments,
+        [(g.variant, g) for g in ablation],
+        f"ablation, {'x'.join(map(str, plan.focus))}: best so far",
+        out / "ablation_curves.png",
+        by="evaluations",
+    )
+
+
+def _curves(
+    experiments: Experiments, groups: list[tuple[str, Group]], title: str, path: Path, by: str
+) -> None:
+    """Best so far of every run of each group, against generation or cumulative evaluations."""
+    plt = figures.pyplot()
+    figure, axes = plt.subplots(figsize=(6.0, 3.4))
+    colours = ["tab:blue", "tab:orange", "tab:green", "tab:red"]
+    for k, (label, group) in enumerate(groups):
+        for n, run in enumerate(group.runs):
+            curve = experiments.curve(run["id"])
+            if by == "evaluations":
+                x, total = [], 0
+                for row in curve:
+                    total += row["evaluations"]
+                    x.append(total)
+            else:
+                x = [row["generation"] for row in curve]
+            y = [row["best_so_far"] for row in curve]
+            axes.plot(
+                x,
+                y,
+                color=colours[k % len(colours)],
+                alpha=0.8,
+                marker="." if len(x) < 20 else None,
+                label=label if n == 0 else None,
+            )
+    axes.set_xlabel("simulations" if by == "evaluations" else "generation")
+    axes.set_ylabel("best so far (m/s)")
+    axes.set_title(title)
+    axes.legend(frameon=False)
+    figure.tight_layout()
+    figures.save(figure, path)
