@@ -51,13 +51,18 @@ def _timed(name: str, evaluate: Callable[[], np.ndarray]) -> BatchResult:
 
 
 class SerialEvaluator(Evaluator):
-    """Everything in the calling process, one batch at a time."""
+    """Everything in the calling process, one batch at a time (batches from several threads
+    wait for each other)."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
 
     def evaluate_batch(
         self, robot_files: Sequence[dict[str, Any]], key: str | None = None
     ) -> BatchResult:
         files = list(robot_files)
-        return _timed("SerialEvaluator", lambda: from_nulls(evaluate_robot_files(files)))
+        with self._lock:
+            return _timed("SerialEvaluator", lambda: from_nulls(evaluate_robot_files(files)))
 
     def capacity(self) -> int:
         return 1

@@ -89,6 +89,7 @@ class FreezingEvaluator(SerialEvaluator):
     """Evaluates `calls` batches, then hangs like a stopped process until released."""
 
     def __init__(self, calls: int) -> None:
+        super().__init__()
         self.calls = calls
         self.release = threading.Event()
 
