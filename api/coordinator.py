@@ -136,8 +136,7 @@ class RunDriver(Hooks):
 
     def _commit(self, step: Step, done: bool) -> None:
         """The generation's statistics, cached fitness, GA state and counters, all or nothing."""
-        stored = step.state.to_json()
-        stored["history"] = []  # the curve lives in `generations`; keep the row small
+        stored = step.state.to_json(history=False)  # the curve lives in `generations`
         cached = {
             index: value
             for index, value in enumerate(step.fitness.tolist())

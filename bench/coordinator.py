@@ -91,13 +91,11 @@ def drive(found: dict[str, Any], url: str, generations: int) -> tuple[float, flo
     database.upgrade()
     config = found["resolve"]({"preset": "paper-voxel", "seed": 1, "generations": generations})
     run = found["create_run"](database, config)
-    coordinator = found["Coordinator"](
-        database, instant_evaluator(found), batch_size=4, poll_seconds=0.01
-    )
+    coordinator = found["Coordinator"](database, instant_evaluator(found), batch_size=4)
     cpu, wall = time.process_time(), time.perf_counter()
     coordinator.start()
     while found["get_run"](database, run.id).status in ("queued", "running"):
-        time.sleep(0.01)
+        time.sleep(0.2)  # rarely: this process's CPU is what is measured
     cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
     coordinator.stop()
     status = found["get_run"](database, run.id).status

@@ -10,6 +10,7 @@ from __future__ import annotations
 import hashlib
 import json
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 
@@ -32,9 +33,10 @@ class Genome:
             real=tuple(float(g) for g in data.get("real", ())),
         )
 
-    @property
+    @cached_property
     def hash(self) -> str:
-        """Stable across processes and machines: sha256 of the canonical JSON, 16 hex digits.
+        """Stable across processes and machines: sha256 of the canonical JSON, 16 hex digits
+        (computed once per genome: the genome is frozen).
 
         Real genes enter as their shortest round-trip repr, so equal floats hash equally.
         """

@@ -24,7 +24,9 @@ CURVE_FIELDS = (
     "generation", "best", "mean", "median", "min", "std", "best_so_far", "diversity", "size",
     "failed", "evaluations", "saved",
 )  # fmt: skip
-INDIVIDUALS = Individual.__table__
+# Core tables: the driver's statements skip the ORM's per-statement work (they run several times
+# a generation, for every run this process drives).
+INDIVIDUALS, GENERATIONS, RUNS = Individual.__table__, Generation.__table__, Run.__table__
 
 
 @dataclass(frozen=True)
@@ -75,13 +77,15 @@ def keep_generation(
     if it was kept before (a takeover), check it is the same and return the fitness saved."""
     with db.write() as session:
         _fence(session, run_id, lease)
-        rows = session.execute(
-            select(Individual.index, Individual.genome_hash, Individual.status, Individual.fitness)
-            .where(Individual.run_id == run_id, Individual.generation == generation)
+        columns = INDIVIDUALS.c
+        connection = session.connection()
+        rows = connection.execute(
+            select(columns["index"], columns.genome_hash, columns.status, columns.fitness)
+            .where(columns.run_id == run_id, columns.generation == generation)
         ).all()  # fmt: skip
         if not rows:
-            session.execute(
-                insert(Individual),
+            connection.execute(
+                insert(INDIVIDUALS),
                 [
                     {**member, "run_id": run_id, "generation": generation, "index": index,
                      "status": IndividualStatus.PENDING.value}
@@ -162,23 +166,25 @@ def commit_generation(
         rows = _fitness_rows(run_id, generation, cached, IndividualStatus.CACHED, None, None)
         if rows:
             session.connection().execute(_SET_FITNESS, rows)
-        session.add(
-            Generation(run_id=run_id, **{key: stats[key] for key in CURVE_FIELDS},
-                       seconds=seconds, committed_at=now())
+        connection = session.connection()
+        connection.execute(
+            insert(GENERATIONS),
+            {"run_id": run_id, **{key: stats[key] for key in CURVE_FIELDS}, "seconds": seconds,
+             "committed_at": now()},
         )  # fmt: skip
         values: dict[str, Any] = {
             "ga_state": state,
             "generations_done": generation + 1,
-            "evaluations": Run.evaluations + stats["evaluations"],
-            "saved": Run.saved + stats["saved"],
-            "compute_seconds": Run.compute_seconds + seconds,
+            "evaluations": RUNS.c.evaluations + stats["evaluations"],
+            "saved": RUNS.c.saved + stats["saved"],
+            "compute_seconds": RUNS.c.compute_seconds + seconds,
         }
         if best is not None:
             values.update(best_fitness=best[0], best_generation=best[1])
         if done:
             values.update(status=RunStatus.COMPLETED.value, finished_at=now(), lease_owner=None,
                           lease_expires=None)  # fmt: skip
-        session.execute(update(Run).where(Run.id == run_id).values(**values))
+        connection.execute(update(RUNS).where(RUNS.c.id == run_id).values(**values))
 
 
 def fail(db: Database, run_id: int, owner: str, message: str) -> None:

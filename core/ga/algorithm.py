@@ -115,7 +115,10 @@ class GAState:
     best: tuple[Genome, float, int] | None = None  # genome, fitness, generation
     history: list[GenerationStats] = field(default_factory=list)
 
-    def to_json(self) -> dict[str, Any]:
+    def to_json(self, history: bool = True) -> dict[str, Any]:
+        """JSON; without `history` (kept elsewhere, as the service keeps its curve) the size
+        no longer grows with the generations."""
+
         def individuals(items: list[Individual] | None) -> list[dict] | None:
             return None if items is None else [item.to_json() for item in items]
 
@@ -132,7 +135,7 @@ class GAState:
                 "fitness": self.best[1],
                 "generation": self.best[2],
             },
-            "history": [stats.to_json() for stats in self.history],
+            "history": [stats.to_json() for stats in self.history] if history else [],
         }
 
     @classmethod

@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
 from softevo.core.ga import operators
+from softevo.core.ga.stats import diversity
+from softevo.core.genome import Genome
 
 seeds = st.integers(0, 2**32 - 1)
 
@@ -103,3 +107,14 @@ def test_tournament_of_size_one_is_uniform_and_large_tournaments_pick_the_best()
     rng = np.random.default_rng(0)
     assert len(set(operators.tournament(fitness, 500, 1, rng).tolist())) == 10
     assert np.mean(operators.tournament(fitness, 500, 8, rng) >= 7) > 0.9
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_diversity_is_the_mean_pairwise_normalised_hamming_distance(seed: int) -> None:
+    """Counted from value counts in one pass; checked here pair by pair, as it is defined."""
+    rng = np.random.default_rng(seed)
+    population = rng.integers(0, 5, size=(int(rng.integers(2, 12)), int(rng.integers(1, 40))))
+    genomes = [Genome("voxel", tuple(int(g) for g in row)) for row in population]
+    pairs = list(itertools.combinations(population, 2))
+    expected = sum(np.mean(a != b) for a, b in pairs) / len(pairs)
+    assert diversity(genomes) == pytest.approx(expected, rel=1e-12)
