@@ -22,7 +22,7 @@ from fastapi.responses import JSONResponse
 from sqlalchemy.exc import InterfaceError, OperationalError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
-from softevo.api import dashboard, store
+from softevo.api import dashboard, replay, store
 from softevo.api.body_limit import BodyLimitMiddleware
 from softevo.api.coordinator import Coordinator
 from softevo.api.db import Database, alembic_config, current_revision
@@ -59,6 +59,18 @@ def default_evaluator(settings: Settings) -> Evaluator:
     return make_evaluator(settings.workers)
 
 
+def _replays_on_workers(settings: Settings) -> Any:
+    """With Redis, replays are computed by the RQ workers too (this process never loads the
+    physics); the replayer, to close at shutdown, or None."""
+    if not settings.redis_url:
+        return None
+    from softevo.worker.evaluator import RQReplayer
+
+    replayer = RQReplayer(settings.redis_url)
+    replay.use_workers(replayer)
+    return replayer
+
+
 def create_app(
     settings: Settings | None = None,
     evaluator_factory: Callable[[Settings], Evaluator] | None = None,
@@ -83,6 +95,7 @@ def create_app(
             poll_seconds=settings.poll_seconds,
         )
         app.state.settings, app.state.db, app.state.coordinator = settings, db, coordinator
+        replayer = _replays_on_workers(settings)
         coordinator.start()
         # What start-up loaded stays for the life of the process: keep it out of the cyclic
         # collector's full passes, which otherwise add ~100 ms to a large response now and then
@@ -93,6 +106,9 @@ def create_app(
         finally:
             coordinator.stop()
             evaluator.close()
+            if replayer is not None:
+                replay.use_workers(None)
+                replayer.close()
             db.dispose()
 
     app = FastAPI(

@@ -1,44 +1,43 @@
-"""A replay: one robot simulated once more with its frames recorded, for a 3D viewer.
+"""Replays served by the API: computed once per (robot, fps) and remembered, on the RQ workers
+when the service has them (the API process then never loads the physics), else in this process.
 
-A replay is computed in the API process on a plain GET, so it is bounded and remembered: the
-frame rate is lowered until the frames hold at most `MAX_POSITIONS` mass positions (a 512-voxel
-robot over 60 s would otherwise be hundreds of megabytes of JSON), and the last few replays are
-kept, so a dashboard refreshing, or many people watching one run, simulates a robot once.
+A replay is asked for on a plain GET, so it is bounded (at most `MAX_POSITIONS` mass positions,
+`softevo.core.replay`) and the last few are kept, so a dashboard refreshing, or many people
+watching one run, simulates a robot once.
 """
 
 from __future__ import annotations
 
 import json
-import math
 import threading
 from collections import OrderedDict
+from collections.abc import Callable
 from typing import Any
 
-from softevo.core.nulls import to_null
-from softevo.core.robot import build_mechanics
+from softevo.core.limits import MAX_REPLAY_POSITIONS
 from softevo.core.robot_file import robot_to_json
 
-#: Most mass positions one replay carries (frames x masses), about 20 MB of JSON.
-MAX_POSITIONS = 1_000_000
+#: Most mass positions one replay carries (frames x masses).
+MAX_POSITIONS = MAX_REPLAY_POSITIONS
 #: Replays remembered (the newest), each at most MAX_POSITIONS positions.
 CACHED = 8
 
+#: (robot file, fps, max positions) -> replay; None: in this process (`use_workers` sets it)
+Remote = Callable[[dict[str, Any], float, int], dict[str, Any]]
+_remote: Remote | None = None
 _cache: OrderedDict[tuple[str, float], dict[str, Any]] = OrderedDict()
 _lock = threading.Lock()
 _computing: dict[tuple[str, float], threading.Lock] = {}
 
 
-def record_every(robot: Any, masses: int, fps: float) -> int:
-    """Steps between frames: `fps` frames per simulated second, fewer if the frames would hold
-    more than MAX_POSITIONS positions."""
-    sim = robot.sim
-    wanted = max(1, round(1.0 / (fps * sim.dt)))
-    frames_allowed = max(2, MAX_POSITIONS // max(1, masses) - 1)
-    return max(wanted, math.ceil(sim.n_steps / frames_allowed))
+def use_workers(remote: Remote | None) -> None:
+    """Compute replays with `remote` (the RQ workers) from now on; None: in this process."""
+    global _remote
+    _remote = remote
 
 
 def replay(robot: Any, fps: float) -> dict[str, Any]:
-    """Frames at (up to) `fps` per simulated second; the physics loads only when asked for."""
+    """Frames at (up to) `fps` per simulated second."""
     key = (json.dumps(robot_to_json(robot), sort_keys=True), fps)
     with _lock:
         if key in _cache:
@@ -64,15 +63,8 @@ def replay(robot: Any, fps: float) -> dict[str, Any]:
 
 
 def _simulate(robot: Any, fps: float) -> dict[str, Any]:
-    from softevo.core.physics import simulate
+    if _remote is not None:
+        return _remote(robot_to_json(robot), fps, MAX_POSITIONS)
+    from softevo.core.replay import replay_frames
 
-    mechanics = build_mechanics(robot)
-    every = record_every(robot, mechanics.n_masses, fps)
-    result, trajectory = simulate(mechanics, record_every=every)
-    assert trajectory is not None
-    return {
-        "speed": to_null(result.speed),
-        "fps": 1.0 / (every * robot.sim.dt),
-        "robot": robot_to_json(robot),
-        **trajectory.to_json(),
-    }
+    return replay_frames(robot, fps, MAX_POSITIONS)

@@ -16,3 +16,5 @@ SERVICE_MAX_VOXELS = 512
 BATCH_SIZE = 4
 #: Batches of one run in flight at once by default (SOFTEVO_QUEUED_BATCHES in the service).
 IN_FLIGHT = 64
+#: Most mass positions one replay carries (frames x masses), about 20 MB of JSON.
+MAX_REPLAY_POSITIONS = 1_000_000

@@ -35,7 +35,14 @@ from rq.job import Job, JobStatus
 
 from softevo.core.evaluator import BatchResult, Evaluator, batch_digest
 from softevo.core.nulls import from_nulls
-from softevo.worker.queue import JOB_FUNCTION, QUEUE, SERIALIZER, connect, result_key
+from softevo.worker.queue import (
+    JOB_FUNCTION,
+    QUEUE,
+    REPLAY_FUNCTION,
+    SERIALIZER,
+    connect,
+    result_key,
+)
 
 log = logging.getLogger("softevo.rq")
 REDIS_DOWN = (RedisConnectionError, RedisTimeoutError, ConnectionError, OSError)
@@ -78,7 +85,7 @@ class RQEvaluator(Evaluator):
         if not files:
             return BatchResult(np.empty(0), "", 0.0)
         key = key or batch_digest(files)
-        payload = self._collect(files, key)
+        payload = self.collect(files, key)
         if "fitness" in payload:
             fitness = from_nulls(payload["fitness"])
             return BatchResult(fitness, str(payload.get("worker", "")), float(payload["seconds"]))
@@ -132,14 +139,16 @@ class RQEvaluator(Evaluator):
             old = self._seconds_per_unit
             self._seconds_per_unit = sample if old is None else 0.7 * old + 0.3 * sample
 
-    def _enqueue(self, files: list[dict[str, Any]], key: str, attempt: int) -> str:
+    def _enqueue(
+        self, files: list[dict[str, Any]], key: str, attempt: int, extra: tuple = ()
+    ) -> str:
         job_id = f"softevo-{key}-a{attempt}"
         expected = self.expected_seconds(files)
         # RQ kills a work horse 60 s after this: the hard limit for a job that runs away
         timeout = 600 if expected is None else max(60, math.ceil(20 * expected))
         self.queue.enqueue(
             self.job_function,
-            args=(key, files),
+            args=(key, files, *extra),
             job_id=job_id,
             job_timeout=timeout,
             result_ttl=600,
@@ -147,14 +156,15 @@ class RQEvaluator(Evaluator):
         )
         return job_id
 
-    def _collect(self, files: list[dict[str, Any]], key: str) -> dict[str, Any]:
-        """Wait for the first result of any attempt, enqueueing again what is lost."""
+    def collect(self, files: list[dict[str, Any]], key: str, extra: tuple = ()) -> dict[str, Any]:
+        """The job's payload (`job_function(key, files, *extra)`): the first result of any
+        attempt, enqueueing again what is lost; `{"error": ...}` when every attempt failed."""
         attempt, job_id = 1, None
         late: set[str] = set()  # attempts presumed lost with their worker
         while True:
             try:
                 if job_id is None:
-                    job_id = self._enqueue(files, key, attempt)
+                    job_id = self._enqueue(files, key, attempt, extra)
                 item = self.connection.blpop([result_key(key)], timeout=self.poll_seconds)
                 payload = None if item is None else parse_result(item[1], len(files))
                 if payload is not None:
@@ -278,3 +288,25 @@ def parse_result(raw: bytes | str, robots: int) -> dict[str, Any] | None:
 def _refuse_constant(name: str) -> Any:
     """NaN and Infinity are not JSON: a failed robot's speed is null."""
     raise ValueError(f"{name} in a result")
+
+
+class RQReplayer:
+    """Replays computed by the RQ workers (`softevo.worker.jobs.replay`), with the same
+    completion as batches (lost jobs enqueued again, a failed one said), so the API process
+    never loads the physics. Called as `api.replay`'s remote: (robot file, fps, max positions)."""
+
+    def __init__(self, redis_url: str) -> None:
+        # a replay records frames and may take minutes: a generous first deadline
+        self.rq = RQEvaluator(
+            redis_url, job_function=REPLAY_FUNCTION, initial_deadline=300.0, max_attempts=2
+        )
+
+    def __call__(self, robot_file: dict[str, Any], fps: float, max_positions: int) -> dict:
+        key = f"replay-{batch_digest([robot_file])}-{fps:g}-{max_positions}"
+        payload = self.rq.collect([robot_file], key, (fps, max_positions))
+        if "replay" not in payload:
+            raise RuntimeError(f"replay failed on the workers: {payload.get('error')}")
+        return payload["replay"]
+
+    def close(self) -> None:
+        self.rq.close()

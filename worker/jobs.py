@@ -1,5 +1,6 @@
-"""The job an RQ worker runs: a batch of robot files in, speeds out, pushed onto the batch's
-result list (`worker.queue.result_key`) so the coordinator wakes at once. Plain JSON both ways.
+"""The jobs an RQ worker runs: a batch of robot files in, speeds out, pushed onto the batch's
+result list (`softevo.worker.queue.result_key`) so the coordinator wakes at once; and a replay of
+one robot (its frames), pushed the same way. Plain JSON both ways.
 
 A robot that cannot be built or whose simulation blows up has fitness None (NaN): failed, never
 0. Anything else that goes wrong is reported as `error`, and the evaluator retries the robots one
@@ -30,6 +31,27 @@ def evaluate_batch(batch_key: str, robot_files: list[dict[str, Any]]) -> dict[st
     except Exception as error:
         payload = {"error": f"{type(error).__name__}: {error}"[:1000]}
     payload.update(worker=worker, seconds=time.perf_counter() - started, robots=len(robot_files))
+    return push_result(batch_key, payload)
+
+
+def replay(
+    batch_key: str, robot_files: list[dict[str, Any]], fps: float, max_positions: int
+) -> dict[str, Any]:
+    """A replay job: the one robot of `robot_files` simulated with its frames recorded
+    (`softevo.core.replay`), pushed like a batch's result with its speed as the fitness."""
+    from softevo.core.replay import replay_frames
+    from softevo.core.robot_file import RobotFileError, parse_robot
+
+    started = time.perf_counter()
+    job = get_current_job()
+    worker = (job and job.worker_name) or f"{socket.gethostname()}:{os.getpid()}"
+    try:
+        (document,) = robot_files
+        data = replay_frames(parse_robot(document), float(fps), int(max_positions))
+        payload: dict[str, Any] = {"fitness": [data["speed"]], "replay": data}
+    except (RobotFileError, ValueError, TypeError) as error:
+        payload = {"error": f"{type(error).__name__}: {error}"[:1000]}
+    payload.update(worker=worker, seconds=time.perf_counter() - started, robots=1)
     return push_result(batch_key, payload)
 
 

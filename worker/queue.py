@@ -12,6 +12,7 @@ from rq.serializers import JSONSerializer
 QUEUE = "softevo"
 #: Named by import path, so the process that enqueues never imports the physics.
 JOB_FUNCTION = "softevo.worker.jobs.evaluate_batch"
+REPLAY_FUNCTION = "softevo.worker.jobs.replay"
 SERIALIZER = JSONSerializer
 #: How long a batch's result waits to be collected (s); a late duplicate expires with it.
 RESULT_TTL = 3600

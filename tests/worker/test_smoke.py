@@ -33,7 +33,7 @@ def test_rq_evaluator_matches_the_serial_one(redis_server, workers, worker_class
 
 
 API_ON_RQ = """
-import sys, time
+import json, sys, time
 from fastapi.testclient import TestClient
 from softevo.api.app import create_app
 from softevo.api.settings import Settings
@@ -46,13 +46,24 @@ with TestClient(create_app(settings)) as client:
         assert time.monotonic() < deadline
         time.sleep(0.05)
     workers = {i["worker"] for i in client.get(f"/runs/{run['id']}/individuals").json()["items"]}
+    best = client.get(f"/runs/{run['id']}/best").json()
+    replay = client.get(f"/runs/{run['id']}/best/replay", params={"fps": 20}).json()
+    again = client.get(f"/runs/{run['id']}/best/replay", params={"fps": 20}).json()  # remembered
+print(json.dumps({"best": best, "replay": replay, "same": replay == again}))
 print(sorted(w for w in workers if w), "numba" in sys.modules)
 """
 
 
 def test_the_api_enqueues_without_loading_the_physics(redis_server, workers, tmp_path) -> None:
+    """Runs and replays alike: the API on Redis has its robots simulated, and its replays
+    recorded, by the workers, and never imports numba; the replay is the one this process
+    computes for the same robot."""
+    import json
     import subprocess
     import sys
+
+    from softevo.core.replay import replay_frames
+    from softevo.core.robot_file import parse_robot
 
     workers.start("physics")
     workers.wait_ready("physics")
@@ -63,7 +74,12 @@ def test_the_api_enqueues_without_loading_the_physics(redis_server, workers, tmp
         timeout=120,
     )
     assert done.returncode == 0, done.stderr[-3000:]
-    assert done.stdout.strip().splitlines()[-1] == "['physics'] False"
+    *_, served, last = done.stdout.strip().splitlines()
+    assert last == "['physics'] False"
+    served = json.loads(served)
+    local = replay_frames(parse_robot(served["best"]), 20.0)
+    assert served["same"] and served["replay"]["frames"] == local["frames"]
+    assert served["replay"]["speed"] == local["speed"] and served["replay"]["fps"] == local["fps"]
 
 
 def test_the_first_job_pays_no_compilation(redis_server, workers, tmp_path, monkeypatch) -> None:

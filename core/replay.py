@@ -1,0 +1,42 @@
+"""A replay: one robot simulated once more with its frames recorded, for a 3D viewer. Computed
+here for the API's local path and for the RQ workers' replay job alike.
+
+The frame rate is lowered until the frames hold at most `max_positions` mass positions (a
+512-voxel robot over 60 s would otherwise be hundreds of megabytes of JSON)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from softevo.core.limits import MAX_REPLAY_POSITIONS
+from softevo.core.nulls import to_null
+from softevo.core.robot import Robot, build_mechanics
+from softevo.core.robot_file import robot_to_json
+
+
+def record_every(robot: Robot, masses: int, fps: float, max_positions: int) -> int:
+    """Steps between frames: `fps` frames per simulated second, fewer if the frames would hold
+    more than `max_positions` positions."""
+    sim = robot.sim
+    wanted = max(1, round(1.0 / (fps * sim.dt)))
+    frames_allowed = max(2, max_positions // max(1, masses) - 1)
+    return max(wanted, math.ceil(sim.n_steps / frames_allowed))
+
+
+def replay_frames(
+    robot: Robot, fps: float, max_positions: int = MAX_REPLAY_POSITIONS
+) -> dict[str, Any]:
+    """The robot's speed, the frame rate used, the robot file and its trajectory (JSON)."""
+    from softevo.core.physics import simulate  # the physics loads only when a replay is asked
+
+    mechanics = build_mechanics(robot)
+    every = record_every(robot, mechanics.n_masses, fps, max_positions)
+    result, trajectory = simulate(mechanics, record_every=every)
+    assert trajectory is not None
+    return {
+        "speed": to_null(result.speed),
+        "fps": 1.0 / (every * robot.sim.dt),
+        "robot": robot_to_json(robot),
+        **trajectory.to_json(),
+    }
