@@ -46,7 +46,21 @@ def require_token(
         raise HTTPException(status.HTTP_403_FORBIDDEN, "wrong bearer token")
 
 
+def is_trusted(
+    settings: Annotated[Settings, Depends(get_settings)],
+    credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
+) -> bool:
+    """Whether the caller may see internals: no token is configured, or it sent the right one."""
+    expected = settings.api_token
+    if not expected:
+        return True
+    return credentials is not None and hmac.compare_digest(
+        credentials.credentials.encode(), expected.encode()
+    )
+
+
 SettingsDep = Annotated[Settings, Depends(get_settings)]
+TrustedDep = Annotated[bool, Depends(is_trusted)]
 DatabaseDep = Annotated[Database, Depends(get_db)]
 CoordinatorDep = Annotated[Coordinator, Depends(get_coordinator)]
 TokenDep = Depends(require_token)

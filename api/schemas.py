@@ -17,8 +17,11 @@ from softevo.core.ga.algorithm import GAConfig
 from softevo.core.limits import MAX_SIDE
 from softevo.core.status import IndividualStatus, RunStatus
 
-Side = Annotated[int, Field(ge=1, le=MAX_SIDE)]
+# Strict numbers in every body: no bool or string for a number, no float for a count.
+Side = Annotated[int, Field(ge=1, le=MAX_SIDE, strict=True)]
 Shape = tuple[Side, Side, Side]
+Seed = Annotated[int, Field(ge=0, le=2**63 - 1, strict=True)]
+Number = Annotated[float, Field(strict=True)]
 
 
 class _RunSettings(BaseModel):
@@ -26,25 +29,27 @@ class _RunSettings(BaseModel):
 
     preset: str = Field("paper-voxel", description="preset whose settings the others override")
     encoding: Literal["voxel", "cube-springs", "spring"] | None = None
-    sim: dict[str, float] | None = Field(None, description="simulation settings to override")
-    cube_options: list[tuple[float, float, float, float]] | None = None
+    sim: dict[str, Number] | None = Field(None, description="simulation settings to override")
+    cube_options: list[tuple[Number, Number, Number, Number]] | None = None
+
+
+def _optional(info: Any) -> Any:
+    """A GA setting as a body field: optional, its bounds kept, strict if it is a number."""
+    strict = [Field(strict=True)] if info.annotation in (int, float, bool) else []
+    metadata = [*info.metadata, *strict]
+    annotation = Annotated[info.annotation, *metadata] if metadata else info.annotation
+    return (annotation | None, Field(None, description=info.description))
 
 
 #: Every GA setting, optional (None: the preset's value), with its bounds in the schema.
-_GA_FIELDS: dict[str, Any] = {
-    name: (
-        (Annotated[info.annotation, *info.metadata] if info.metadata else info.annotation) | None,
-        Field(None, description=info.description),
-    )
-    for name, info in GAConfig.model_fields.items()
-}
+_GA_FIELDS: dict[str, Any] = {name: _optional(info) for name, info in GAConfig.model_fields.items()}
 RunSettings = create_model("RunSettings", __base__=_RunSettings, **_GA_FIELDS)
 
 
 class RunCreate(RunSettings):  # type: ignore[misc, valid-type]
     """`{"preset": "paper-voxel", "seed": 1, "shape": [5, 5, 3], ...}`."""
 
-    seed: int = Field(0, ge=0, le=2**63 - 1)
+    seed: Seed = 0
     shape: Shape | None = Field(None, description="bounding box [nx, ny, nz] in voxels")
 
 
@@ -54,9 +59,7 @@ class SweepCreate(RunSettings):  # type: ignore[misc, valid-type]
     shapes: list[Shape] = Field(
         default_factory=lambda: list(PAPER_NINE_SHAPES), min_length=1, max_length=1000
     )
-    seeds: list[Annotated[int, Field(ge=0, le=2**63 - 1)]] = Field(
-        default_factory=lambda: [1, 2, 3], min_length=1, max_length=1000
-    )
+    seeds: list[Seed] = Field(default_factory=lambda: [1, 2, 3], min_length=1, max_length=1000)
 
 
 class RunProgress(BaseModel):
@@ -164,10 +167,13 @@ class Preset(BaseModel):
 
 
 class Health(BaseModel):
+    """What is up. With SOFTEVO_API_TOKEN set, why a part is down (the exception) and the
+    coordinator's identity and runs are shown only to a caller with the token."""
+
     status: Literal["ok", "degraded"]
     database: str
     redis: str
-    coordinator: dict[str, Any]
+    coordinator: dict[str, Any] | None
 
 
 class Message(BaseModel):

@@ -78,6 +78,20 @@ def warm_up() -> None:
     simulate(robot)
 
 
+def _pool_process() -> None:
+    """A pool process's start: it exits when its parent dies, however it dies (a SIGKILLed
+    server leaves no simulations running under init), then loads the kernels."""
+    parent = os.getppid()
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(0)
+
+    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
+    warm_up()
+
+
 class PoolEvaluator(Evaluator):
     """A local pool of worker processes (default: one per core), each warmed up once. A batch
     runs in one process, across the kernel's SIMD lanes; the generation step cuts a generation
@@ -94,7 +108,7 @@ class PoolEvaluator(Evaluator):
         return ProcessPoolExecutor(
             max_workers=self.processes,
             mp_context=multiprocessing.get_context("spawn"),
-            initializer=warm_up,
+            initializer=_pool_process,
         )
 
     def evaluate_batch(

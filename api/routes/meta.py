@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from fastapi import APIRouter, Response
 
-from softevo.api.deps import CoordinatorDep, DatabaseDep, SettingsDep
+from softevo.api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TrustedDep
 from softevo.api.schemas import Health, Preset
 from softevo.core.config import PRESET_DESCRIPTIONS, PRESETS
 
@@ -13,9 +13,14 @@ router = APIRouter(tags=["meta"])
 
 @router.get("/healthz", responses={503: {"model": Health}})
 def healthz(
-    db: DatabaseDep, settings: SettingsDep, coordinator: CoordinatorDep, response: Response
+    db: DatabaseDep,
+    settings: SettingsDep,
+    coordinator: CoordinatorDep,
+    trusted: TrustedDep,
+    response: Response,
 ) -> Health:
-    """The database and, when configured, Redis; 503 when either is down."""
+    """The database and, when configured, Redis; 503 when either is down. Internals (the
+    exception, the coordinator) only for a caller with the token, when one is set."""
     database = redis = "ok"
     try:
         db.ping()
@@ -36,11 +41,15 @@ def healthz(
     healthy = database == "ok" and redis in ("ok", "not configured")
     if not healthy:
         response.status_code = 503
+    if not trusted:
+        database, redis = (part.split(":")[0] for part in (database, redis))
     return Health(
         status="ok" if healthy else "degraded",
         database=database,
         redis=redis,
-        coordinator={"owner": coordinator.owner, "driving": coordinator.active},
+        coordinator={"owner": coordinator.owner, "driving": coordinator.active}
+        if trusted
+        else None,
     )
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import io
+import re
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Body, Path, Query, Request, Response, status
@@ -227,6 +228,17 @@ def get_replay(
     }
 
 
+_EVENT_ID = re.compile(r"-?[0-9]{1,10}")
+
+
+def last_event_id(header: str | None) -> int:
+    """The generation a reconnecting client saw last; anything but a plain integer of at most
+    ten digits (garbage, `--5`, a superscript digit, thousands of digits) means none: -1."""
+    if header is None or not _EVENT_ID.fullmatch(header):
+        return -1
+    return max(-1, int(header))
+
+
 @router.get(
     "/{run_id}/events",
     responses={**NOT_FOUND, 200: {"content": {"text/event-stream": {}}}},
@@ -235,8 +247,7 @@ def get_replay(
 def get_events(run_id: RunId, db: DatabaseDep, request: Request) -> StreamingResponse:
     """Server-sent events: `generation` per committed generation, then `end` with the run."""
     store.get_run(db, run_id)
-    last = request.headers.get("last-event-id")
-    after = int(last) if last is not None and last.lstrip("-").isdigit() else -1
+    after = last_event_id(request.headers.get("last-event-id"))
     return StreamingResponse(
         event_stream(request, db, run_id, after, lambda r: run_public(db, r)),
         media_type="text/event-stream",

@@ -151,6 +151,12 @@ def test_events_stream_one_per_generation_then_end(client: TestClient) -> None:
     with client.stream("GET", f"/runs/{run_id}/events", headers={"Last-Event-ID": "1"}) as s:
         body = "".join(s.iter_text())
     assert body.count("event: generation") == 1 and "id: 2" in body
+    # a Last-Event-ID that is not a plain integer counts as none: the whole stream, never a 500
+    for hostile in ("--5", "\xb2", "9" * 5000, "1e3", " 1", "-0x1"):
+        headers = {"Last-Event-ID": hostile.encode("latin-1")}
+        with client.stream("GET", f"/runs/{run_id}/events", headers=headers) as s:
+            assert s.status_code == 200
+            assert "".join(s.iter_text()).count("event: generation") == 3, hostile
 
 
 def test_list_runs_paginates_and_filters(client: TestClient) -> None:
@@ -216,6 +222,13 @@ def test_runs_beyond_the_bound_wait_queued(make_client: Callable[..., TestClient
         ({"colour": "red"}, ["body", "colour"]),
         ({"seed": -1}, ["body", "seed"]),
         ({"population": 1000, "generations": 5000}, ["body", "generations"]),
+        # strict types: no bool or string for a number, no float for a count
+        ({"seed": True}, ["body", "seed"]),
+        ({"seed": "5"}, ["body", "seed"]),
+        ({"population": 2.0}, ["body", "population"]),
+        ({"shape": [True, 1, 1]}, ["body", "shape", 0]),
+        ({"elitism": 1}, ["body", "elitism"]),
+        ({"sim": {"duration": True}}, ["body", "sim", "duration"]),
     ],
 )
 def test_bad_configs_are_refused_naming_the_field(

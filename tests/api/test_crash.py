@@ -403,3 +403,56 @@ def test_sigkill_inside_the_generation_commit_transaction(
         for server in servers:
             server.kill()
         watch.dispose()
+
+
+def _children(pid: int) -> set[int]:
+    """Processes whose parent is `pid` (from /proc)."""
+    found = set()
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            found.add(int(stat.parent.name))
+    return found
+
+
+def _alive(pid: int) -> bool:
+    """Running, not a zombie waiting for a parent (init here may never reap it)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+@pytest.mark.slow
+@pytest.mark.fault
+def test_sigkill_of_the_server_leaves_no_pool_process(tmp_path: Path) -> None:
+    """The in-process pool's processes (and multiprocessing's resource tracker) go with the
+    server however it dies: none is left simulating under init."""
+    env = {
+        **{k: v for k, v in os.environ.items() if not k.startswith("SOFTEVO_")},
+        "SOFTEVO_DATABASE_URL": f"sqlite:///{tmp_path / 'softevo.db'}",
+        "SOFTEVO_WORKERS": "2",
+    }
+    local = start_service(env, tmp_path / "server.log")
+    try:
+        with httpx.Client(base_url=local.url, timeout=30) as client:
+            run = client.post("/runs", json={**REQUEST, "generations": 2}).json()["id"]
+            deadline = time.monotonic() + 120
+            while client.get(f"/runs/{run}").json()["status"] != "completed":
+                assert time.monotonic() < deadline, local.tail()
+                time.sleep(0.1)
+        children = _children(local.process.pid)
+        assert len(children) >= 2, children  # the pool's two processes, at least
+        local.kill()
+        killed = time.monotonic()
+        while any(_alive(pid) for pid in children):
+            assert time.monotonic() - killed < 15, [p for p in children if _alive(p)]
+            time.sleep(0.1)
+        print(f"[h] {len(children)} children of the SIGKILLed server gone "
+              f"{time.monotonic() - killed:.2f} s after")  # fmt: skip
+    finally:
+        local.stop()

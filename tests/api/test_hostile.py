@@ -235,6 +235,19 @@ def test_every_state_changing_endpoint_needs_the_token(
     assert run_count(client) == 0
 
 
+def test_healthz_shows_internals_only_with_the_token(
+    make_client: Callable[..., TestClient],
+) -> None:
+    client = make_client(api_token="s3cret")
+    anyone = client.get("/healthz").json()
+    assert anyone["status"] == "ok" and anyone["coordinator"] is None
+    guess = client.get("/healthz", headers={"Authorization": "Bearer guess"}).json()
+    assert guess["coordinator"] is None
+    trusted = client.get("/healthz", headers={"Authorization": "Bearer s3cret"}).json()
+    owner = trusted["coordinator"]["owner"]
+    assert owner.count(":") == 2 and owner not in client.get("/healthz").text
+
+
 def test_errors_say_nothing_about_other_runs(make_client: Callable[..., TestClient]) -> None:
     client = make_client(api_token="s3cret")
     auth = {"Authorization": "Bearer s3cret"}
