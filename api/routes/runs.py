@@ -198,7 +198,7 @@ def get_individual(
 
 def _best_robot(db: Database, run_id: int) -> Any:
     run = store.get_run(db, run_id)
-    best = (run.ga_state or {}).get("best")
+    best = store.best_individual(db, run)
     if best is None:
         raise store.NotFoundError(f"run {run_id} has no evaluated generation yet")
     config = RunConfig.model_validate(run.config)

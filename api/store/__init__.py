@@ -12,6 +12,7 @@ from softevo.api.store.runs import (
     NotFoundError,
     QueueFullError,
     RunRecord,
+    best_individual,
     cancel_run,
     create_run,
     create_sweep,
@@ -25,7 +26,7 @@ from softevo.api.store.runs import (
 )
 
 __all__ = [
-    "ConflictError", "NotFoundError", "QueueFullError", "RunRecord", "cancel_run", "create_run",
-    "create_sweep", "curve", "driving", "get_individual", "get_run", "get_sweep", "leases",
-    "list_individuals", "list_runs", "progress_counts",
+    "ConflictError", "NotFoundError", "QueueFullError", "RunRecord", "best_individual",
+    "cancel_run", "create_run", "create_sweep", "curve", "driving", "get_individual", "get_run",
+    "get_sweep", "leases", "list_individuals", "list_runs", "progress_counts",
 ]  # fmt: skip

@@ -12,6 +12,7 @@ from datetime import UTC, datetime
 from typing import Any
 
 from sqlalchemy import func, select, update
+from sqlalchemy.orm import defer
 
 from softevo.api.db import Database
 from softevo.api.models import Generation, Individual, Run, Sweep
@@ -77,7 +78,10 @@ class RunRecord:
     started_at: datetime | None
     finished_at: datetime | None
     takeovers: int
-    ga_state: dict[str, Any] | None
+
+
+#: Runs as reads see them: never the GA state (two populations of JSON, only the coordinator's).
+_RUNS = select(Run).options(defer(Run.ga_state, raiseload=True))
 
 
 def _record(row: Run) -> RunRecord:
@@ -88,7 +92,6 @@ def _record(row: Run) -> RunRecord:
         best_fitness=row.best_fitness, best_generation=row.best_generation,
         compute_seconds=row.compute_seconds, error=row.error, created_at=row.created_at,
         started_at=row.started_at, finished_at=row.finished_at, takeovers=row.takeovers,
-        ga_state=row.ga_state,
     )  # fmt: skip
 
 
@@ -127,7 +130,7 @@ def create_sweep(
 
 def get_run(db: Database, run_id: int) -> RunRecord:
     with db.read() as session:
-        row = session.get(Run, run_id)
+        row = session.scalar(_RUNS.where(Run.id == run_id))
         if row is None:
             raise NotFoundError(f"run {run_id} not found")
         return _record(row)
@@ -137,11 +140,11 @@ def list_runs(
     db: Database, status: str | None, offset: int, limit: int
 ) -> tuple[list[RunRecord], int]:
     with db.read() as session:
-        query = select(Run)
-        if status is not None:
-            query = query.where(Run.status == status)
-        total = session.scalar(select(func.count()).select_from(query.subquery())) or 0
-        rows = session.scalars(query.order_by(Run.id.desc()).offset(offset).limit(limit))
+        where = [] if status is None else [Run.status == status]
+        total = session.scalar(select(func.count(Run.id)).where(*where)) or 0
+        rows = session.scalars(
+            _RUNS.where(*where).order_by(Run.id.desc()).offset(offset).limit(limit)
+        )
         return [_record(row) for row in rows], total
 
 
@@ -225,7 +228,7 @@ def get_sweep(db: Database, sweep_id: int) -> tuple[dict[str, Any], list[RunReco
         sweep = session.get(Sweep, sweep_id)
         if sweep is None:
             raise NotFoundError(f"sweep {sweep_id} not found")
-        rows = session.scalars(select(Run).where(Run.sweep_id == sweep_id).order_by(Run.id))
+        rows = session.scalars(_RUNS.where(Run.sweep_id == sweep_id).order_by(Run.id))
         return {"id": sweep.id, "request": sweep.request, "created_at": sweep.created_at}, [
             _record(row) for row in rows
         ]
@@ -240,3 +243,24 @@ def progress_counts(db: Database, run_id: int) -> dict[str, int]:
             .group_by(Individual.status)
         )
         return {status: count for status, count in rows}
+
+
+def best_individual(db: Database, run: RunRecord) -> dict[str, Any] | None:
+    """The run's fastest individual so far (the GA's best: the first of its generation with the
+    best fitness), with its genome; None before a generation is committed."""
+    if run.best_generation is None or run.best_fitness is None:
+        return None
+    with db.read() as session:
+        row = session.scalar(
+            select(Individual)
+            .where(
+                Individual.run_id == run.id,
+                Individual.generation == run.best_generation,
+                Individual.fitness == run.best_fitness,
+            )
+            .order_by(Individual.index)
+            .limit(1)
+        )
+        if row is None:
+            return None
+        return {**individual_json(row, run.config["population"]), "genome": row.genome}

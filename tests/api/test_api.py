@@ -6,9 +6,11 @@ import json
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 from fastapi.testclient import TestClient
+from sqlalchemy import event
 
 from softevo.cli import main
 
@@ -379,3 +381,27 @@ def test_readers_and_writers_never_fail_while_a_run_writes(
     assert len(codes) > 50 and set(codes) == {200}, sorted(set(codes))
     assert client.get(f"/runs/{run_id}").json()["status"] in ("running", "completed")
     client.post(f"/runs/{run_id}/cancel")
+
+
+def test_reads_never_load_the_ga_state(client: TestClient) -> None:
+    """The GA state (two populations of JSON) is the coordinator's: no read route selects it,
+    so a listing of large runs costs what their summaries cost."""
+    run_id = start(client)
+    wait_for(client, run_id, ("completed",))
+    statements: list[str] = []
+
+    def seen(_conn: Any, _cursor: Any, statement: str, *_args: Any) -> None:
+        statements.append(statement)
+
+    engine = client.app.state.db.engine  # type: ignore[attr-defined]
+    event.listen(engine, "before_cursor_execute", seen)
+    try:
+        for path in ("/runs", f"/runs/{run_id}", f"/runs/{run_id}/curve",
+                     f"/runs/{run_id}/individuals", f"/runs/{run_id}/best"):  # fmt: skip
+            assert client.get(path).status_code == 200, path
+        with client.stream("GET", f"/runs/{run_id}/events") as stream:
+            assert "event: end" in "".join(stream.iter_text())
+    finally:
+        event.remove(engine, "before_cursor_execute", seen)
+    selects = [s for s in statements if s.lstrip().upper().startswith("SELECT")]
+    assert selects and not [s for s in selects if "ga_state" in s]
