@@ -50,6 +50,14 @@ def add_parsers(commands: Any) -> None:
     worker.add_argument(
         "--log-level", default="info", choices=["debug", "info", "warning", "error"]
     )
+    worker.add_argument(
+        "--allow-function",
+        action="append",
+        default=[],
+        metavar="MODULE.FUNCTION",
+        help="also run jobs of this function (tests, extensions; repeatable). By default a worker "
+        "runs softevo's own jobs only and refuses any other function or callback",
+    )
     worker.set_defaults(handler=worker_command)
 
     db = commands.add_parser(
@@ -131,6 +139,7 @@ def worker_command(args: argparse.Namespace) -> int:
             name=args.name,
             worker_class=args.worker_class,
             log_level=args.log_level.upper(),
+            allow=tuple(args.allow_function),
         )
     except (RedisError, ValueError) as error:
         raise CommandError(f"{redacted(url)}: {str(error).splitlines()[0]}") from None

@@ -20,6 +20,7 @@ from redis.exceptions import ConnectionError as RedisConnectionError
 from redis.exceptions import TimeoutError as RedisTimeoutError
 from rq import Queue, SimpleWorker, Worker
 
+from softevo.worker.job import job_class
 from softevo.worker.queue import QUEUE, SERIALIZER, connect
 
 WORKER_CLASSES: dict[str, type[Worker]] = {"fork": Worker, "simple": SimpleWorker}
@@ -33,6 +34,7 @@ def run_worker(
     worker_class: str = "fork",
     queue: str = QUEUE,
     log_level: str = "INFO",
+    allow: tuple[str, ...] = (),
 ) -> bool:
     """Warm up, then work until stopped (or, with `burst`, until the queue is empty)."""
     from softevo.core.evaluation import warm_up
@@ -45,12 +47,14 @@ def run_worker(
     connection.ping()  # fail now, with a clear error, if Redis is not there at the start
     base = name or f"{socket.gethostname()}.{os.getpid()}.{uuid.uuid4().hex[:6]}"
     cls = WORKER_CLASSES[worker_class]
+    jobs = job_class(allow)  # softevo's job functions only (and `allow`), no callbacks
     for restart in itertools.count():
         # after Redis went away under a job, register afresh (the old name may still linger)
         worker = cls(
-            [Queue(queue, connection=connection, serializer=SERIALIZER)],
+            [Queue(queue, connection=connection, serializer=SERIALIZER, job_class=jobs)],
             connection=connection,
             serializer=SERIALIZER,
+            job_class=jobs,
             name=base if restart == 0 else f"{base}.r{restart}",
         )
         log.info("worker %s: kernels warm (%.2f s), taking jobs", worker.name, warm)

@@ -1,0 +1,62 @@
+"""A worker runs softevo's jobs and nothing else (`softevo.worker.job`): a job written into
+Redis that names another function (`os.system`, `builtins.eval`) or any callback fails, runs
+nothing, is said in the worker's log, and the worker goes on to evaluate the next batch."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+from rq import Queue
+from rq.job import JobStatus
+
+from softevo.core.config import resolve
+from softevo.core.evaluation import SerialEvaluator
+from softevo.core.evolution import Evolution
+from softevo.core.robot_file import robot_to_json
+from softevo.worker.evaluator import RQEvaluator
+from softevo.worker.queue import JOB_FUNCTION, QUEUE, SERIALIZER, connect
+from tests.services import RedisServer, Workers
+
+
+def settle(queue: Queue, job_id: str, timeout: float = 30) -> JobStatus:
+    deadline = time.monotonic() + timeout
+    while True:
+        status = queue.fetch_job(job_id).get_status()
+        if status in (JobStatus.FINISHED, JobStatus.FAILED) or time.monotonic() > deadline:
+            return status
+        time.sleep(0.05)
+
+
+def test_a_worker_refuses_any_function_but_softevos(
+    redis_server: RedisServer, workers: Workers, tmp_path: Path
+) -> None:
+    workers.start("guard")
+    workers.wait_ready("guard")
+    touched = tmp_path / "touched"
+    connection = connect(redis_server.url)
+    queue = Queue(QUEUE, connection=connection, serializer=SERIALIZER)
+    hostile = [
+        queue.enqueue("os.system", args=[f"touch {touched}"], job_id="evil-system"),
+        queue.enqueue("builtins.eval", args=[f"open('{touched}', 'w')"], job_id="evil-eval"),
+        # softevo's own function, but with a callback that would run anything
+        queue.enqueue(
+            JOB_FUNCTION, args=["cb", []], job_id="evil-callback", on_success="os.system"
+        ),
+    ]
+    for job in hostile:
+        assert settle(queue, job.id) == JobStatus.FAILED, job.id
+    assert not touched.exists()
+    log = workers.log("guard")
+    for job in hostile:
+        assert f"refused job {job.id}" in log
+    assert workers.processes["guard"].poll() is None  # it goes on ...
+    evolution = Evolution.start(resolve({"preset": "quick", "population": 3, "seed": 2}))
+    files = [robot_to_json(evolution.robot(item)) for item in evolution.individuals()]
+    with RQEvaluator(redis_server.url, poll_seconds=0.2) as evaluator:  # ... with real work
+        result = evaluator.evaluate_batch(files, "after-the-refusals")
+    expected = SerialEvaluator().evaluate_batch(files).fitness
+    assert np.array_equal(result.fitness, expected, equal_nan=True)
+    assert result.worker == "guard"
+    connection.close()

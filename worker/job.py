@@ -1,0 +1,64 @@
+"""The job class every `softevo worker` uses: it runs softevo's own job functions and nothing
+else. RQ names a job's function and callbacks by import path, so anyone who can write to Redis
+could otherwise have a worker run `os.system`; such a job fails here, before anything is
+imported, with a log line, and the worker goes on with the next job."""
+
+from __future__ import annotations
+
+import logging
+from typing import Any, ClassVar
+
+from rq.job import Job
+
+from softevo.worker.queue import JOB_FUNCTIONS
+
+log = logging.getLogger("softevo.worker")
+
+
+class RefusedJobError(RuntimeError):
+    """A job that names a function softevo does not run, or any callback."""
+
+
+class SoftevoJob(Job):
+    """An RQ job restricted to `allowed` functions, with no callbacks."""
+
+    allowed: ClassVar[frozenset[str]] = JOB_FUNCTIONS
+
+    @property
+    def func(self) -> Any:
+        callbacks = [
+            name
+            for name in (
+                self._success_callback_name,
+                self._failure_callback_name,
+                self._stopped_callback_name,
+            )
+            if name
+        ]
+        if self.func_name not in self.allowed or self.instance is not None or callbacks:
+            what = f"function {self.func_name!r}" + (
+                f", callbacks {callbacks}" if callbacks else ""
+            )
+            log.warning("refused job %s: %s is not one of softevo's jobs", self.id, what)
+            raise RefusedJobError(f"refused: {what} is not one of softevo's jobs")
+        return super().func
+
+    # callbacks are never imported or run (a job that names one is refused above)
+    @property
+    def success_callback(self) -> None:
+        return None
+
+    @property
+    def failure_callback(self) -> None:
+        return None
+
+    @property
+    def stopped_callback(self) -> None:
+        return None
+
+
+def job_class(also: tuple[str, ...] = ()) -> type[SoftevoJob]:
+    """SoftevoJob, allowing `also` (dotted function names: tests, extensions) besides."""
+    if not also:
+        return SoftevoJob
+    return type("SoftevoJob", (SoftevoJob,), {"allowed": JOB_FUNCTIONS | frozenset(also)})
