@@ -66,7 +66,7 @@ def _replays_on_workers(settings: Settings) -> Any:
         return None
     from softevo.worker.evaluator import RQReplayer
 
-    replayer = RQReplayer(settings.redis_url)
+    replayer = RQReplayer(settings.redis_url, timeout=settings.replay_seconds)
     replay.use_workers(replayer)
     return replayer
 
@@ -139,6 +139,10 @@ def _install_error_handlers(app: FastAPI) -> None:
     @app.exception_handler(store.QueueFullError)
     async def queue_full(_request: Request, error: store.QueueFullError) -> JSONResponse:
         return JSONResponse({"detail": str(error)}, status_code=429, headers={"Retry-After": "30"})
+
+    @app.exception_handler(replay.ReplayUnavailableError)
+    async def no_replay(_request: Request, error: replay.ReplayUnavailableError) -> JSONResponse:
+        return JSONResponse({"detail": str(error)}, status_code=503)
 
     @app.exception_handler(RequestError)
     async def bad_request(_request: Request, error: RequestError) -> JSONResponse:

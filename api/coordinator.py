@@ -192,7 +192,9 @@ class Coordinator:
         self._wake.set()
         if self._thread is not None:
             self._thread.join(timeout)
-        for _driver, thread in list(self._drivers.values()):
+        with self._lock:
+            threads = [thread for _driver, thread in self._drivers.values()]
+        for thread in threads:
             thread.join(timeout)
         try:
             store.leases.release_all(self.db, self.owner)

@@ -62,9 +62,16 @@ def replay(robot: Any, fps: float) -> dict[str, Any]:
     return data
 
 
+class ReplayUnavailableError(RuntimeError):
+    """The workers gave no replay (none live in time, the job failed): 503, saying why."""
+
+
 def _simulate(robot: Any, fps: float) -> dict[str, Any]:
     if _remote is not None:
-        return _remote(robot_to_json(robot), fps, MAX_POSITIONS)
+        try:
+            return _remote(robot_to_json(robot), fps, MAX_POSITIONS)
+        except RuntimeError as error:
+            raise ReplayUnavailableError(str(error)) from None
     from softevo.core.replay import replay_frames
 
     return replay_frames(robot, fps, MAX_POSITIONS)

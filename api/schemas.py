@@ -1,8 +1,8 @@
 """Request and response bodies of the REST API (the OpenAPI schema at /docs is built from these).
 
 `RunCreate` is a preset name plus any setting to override; the merged result is validated by
-`core.config.resolve` (which names the offending field) and then checked against the service's
-ceilings (`api.settings.Limits`).
+`softevo.core.config.resolve` (which names the offending field) and then checked against the
+service's ceilings (`softevo.api.settings.Limits`).
 """
 
 from __future__ import annotations

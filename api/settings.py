@@ -42,6 +42,7 @@ class Settings:
     workers: int | None = None  # in-process pool size (default: one per core)
     batch_size: int = BATCH_SIZE  # robots per evaluator call; fitness is saved batch by batch
     queued_batches: int = IN_FLIGHT  # batches of one run in flight at once
+    replay_seconds: float = 600.0  # with Redis: a replay GET waits at most this for a worker
     lease_seconds: float = 15.0  # a coordinator that stops heartbeating loses its runs after this
     poll_seconds: float = 0.5  # how often the scheduler looks for queued or orphaned runs
     limits: Limits = field(default_factory=Limits)

@@ -71,7 +71,8 @@ class Evolution:
         return self.algorithm.encoding.to_robot(individual.genome, self.config.sim)
 
     def step(self, evaluator: Evaluator) -> GenerationStats:
-        """Evaluate and tell one generation (the one generation step of `core.generation`)."""
+        """Evaluate and tell one generation (the one generation step of
+        `softevo.core.generation`)."""
         step = self.engine.step(self.state, self.cache, evaluator)
         self.state = step.state
         self.evaluations += step.stats.evaluations

@@ -2,7 +2,8 @@
 
 A genome is a list of discrete genes (small integers, each with its own alphabet size) and a list
 of real genes (each with bounds). What the genes mean is the encoding's business
-(`core.encodings`); the operators in `core.ga.operators` only see integers and floats.
+(`softevo.core.encodings`); the operators in `softevo.core.ga.operators` only see integers and
+floats.
 """
 
 from __future__ import annotations

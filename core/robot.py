@@ -63,7 +63,7 @@ class SpringRobot:
     """A lattice whose springs each carry [k, b, w, c] (the paper's phase 2 cube is 1x1x1).
 
     `filled` marks the voxels of the morphology; `springs` is a float array [S, 4] in the
-    canonical spring order of `core.lattice`.
+    canonical spring order of `softevo.core.lattice`.
     """
 
     shape: tuple[int, int, int]

@@ -7,6 +7,12 @@ from typing import Any
 
 
 def add_parsers(commands: Any) -> None:
+    _serve_parser(commands)
+    _worker_parser(commands)
+    _db_parser(commands)
+
+
+def _serve_parser(commands: Any) -> None:
     serve = commands.add_parser(
         "serve",
         help="serve the REST API and drive runs (SQLite + in-process pool by default)",
@@ -28,6 +34,8 @@ def add_parsers(commands: Any) -> None:
     )
     serve.set_defaults(handler=serve_command)
 
+
+def _worker_parser(commands: Any) -> None:
     worker = commands.add_parser(
         "worker",
         help="evaluate robots for the service: an RQ worker on SOFTEVO_REDIS_URL",
@@ -60,6 +68,8 @@ def add_parsers(commands: Any) -> None:
     )
     worker.set_defaults(handler=worker_command)
 
+
+def _db_parser(commands: Any) -> None:
     db = commands.add_parser(
         "db", help="database maintenance", description="Database maintenance commands."
     )

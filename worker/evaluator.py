@@ -156,12 +156,23 @@ class RQEvaluator(Evaluator):
         )
         return job_id
 
-    def collect(self, files: list[dict[str, Any]], key: str, extra: tuple = ()) -> dict[str, Any]:
+    def collect(
+        self,
+        files: list[dict[str, Any]],
+        key: str,
+        extra: tuple = (),
+        timeout: float | None = None,
+    ) -> dict[str, Any]:
         """The job's payload (`job_function(key, files, *extra)`): the first result of any
-        attempt, enqueueing again what is lost; `{"error": ...}` when every attempt failed."""
+        attempt, enqueueing again what is lost; `{"error": ...}` when every attempt failed or,
+        with `timeout` (s), when none came back in time (no live worker, say)."""
         attempt, job_id = 1, None
         late: set[str] = set()  # attempts presumed lost with their worker
+        started = time.monotonic()
         while True:
+            if timeout is not None and time.monotonic() - started > timeout:
+                self._retire(key, attempt, late | {f"softevo-{key}-a{attempt}"}, None)
+                return {"error": f"no result in {timeout:g} s (are workers running?)"}
             try:
                 if job_id is None:
                     job_id = self._enqueue(files, key, attempt, extra)
@@ -290,22 +301,30 @@ def _refuse_constant(name: str) -> Any:
     raise ValueError(f"{name} in a result")
 
 
+class ReplayUnavailableError(RuntimeError):
+    """The workers gave no replay (none live in time, or the job failed): a 503, said why."""
+
+
 class RQReplayer:
     """Replays computed by the RQ workers (`softevo.worker.jobs.replay`), with the same
     completion as batches (lost jobs enqueued again, a failed one said), so the API process
-    never loads the physics. Called as `api.replay`'s remote: (robot file, fps, max positions)."""
+    never loads the physics. Called as `softevo.api.replay`'s remote: (robot file, fps, max
+    positions)."""
 
-    def __init__(self, redis_url: str) -> None:
+    def __init__(self, redis_url: str, timeout: float = 600.0) -> None:
         # a replay records frames and may take minutes: a generous first deadline
         self.rq = RQEvaluator(
             redis_url, job_function=REPLAY_FUNCTION, initial_deadline=300.0, max_attempts=2
         )
+        self.timeout = timeout  # a GET never waits longer, with or without workers
 
     def __call__(self, robot_file: dict[str, Any], fps: float, max_positions: int) -> dict:
         key = f"replay-{batch_digest([robot_file])}-{fps:g}-{max_positions}"
-        payload = self.rq.collect([robot_file], key, (fps, max_positions))
+        payload = self.rq.collect([robot_file], key, (fps, max_positions), self.timeout)
         if "replay" not in payload:
-            raise RuntimeError(f"replay failed on the workers: {payload.get('error')}")
+            raise ReplayUnavailableError(
+                f"the replay failed on the workers: {payload.get('error')}"
+            )
         return payload["replay"]
 
     def close(self) -> None:

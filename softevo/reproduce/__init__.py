@@ -5,7 +5,7 @@ Everything that evolves goes through the REST API: the nine bounding boxes as on
 measured evaluation budget), the `spring` encoding against `voxel`, and an ablation of the
 paper's GA settings. Without `--url` a private `softevo serve` (SQLite in the output folder, the
 in-process pool on every core) is started and stopped here. Phase 1, the breathing cube, is one
-robot, not an evolution: it is simulated in this process with `core.physics`.
+robot, not an evolution: it is simulated in this process with `softevo.core.physics`.
 
 Outputs in `--out`: results.csv and results.md (one row per experiment, variant and box: best
 speed over seeds, best within the GA's simulation budget, evaluations, wall time), the figures as

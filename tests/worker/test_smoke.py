@@ -110,3 +110,32 @@ def test_the_first_job_pays_no_compilation(redis_server, workers, tmp_path, monk
     assert warm > 1.0, "nothing was compiled: the comparison says nothing"
     assert first.seconds < warm / 5
     assert first.seconds < 2 * second.seconds + 0.05
+
+
+def test_a_replay_with_no_live_worker_is_a_503_not_a_hang(redis_server, tmp_path) -> None:
+    """On Redis with no worker, a replay GET waits `replay_seconds`, then says why (503)."""
+    import time
+
+    from fastapi.testclient import TestClient
+
+    from softevo.api.app import create_app
+    from softevo.api.settings import Settings
+
+    settings = Settings(
+        database_url=f"sqlite:///{tmp_path / 'api.db'}",
+        redis_url=redis_server.url,
+        poll_seconds=0.05,
+        replay_seconds=1.0,
+    )
+    with TestClient(create_app(settings)) as client:
+        run = client.post("/runs", json={"preset": "quick", "population": 4}).json()["id"]
+        deadline = time.monotonic() + 30
+        while client.get(f"/runs/{run}/individuals").json()["total"] == 0:
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+        started = time.monotonic()
+        answer = client.get(f"/runs/{run}/individuals/0/replay")
+        waited = time.monotonic() - started
+        client.post(f"/runs/{run}/cancel")
+    assert answer.status_code == 503 and "no result in 1 s" in answer.json()["detail"]
+    assert waited < 10
