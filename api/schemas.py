@@ -29,8 +29,12 @@ class _RunSettings(BaseModel):
 
     preset: str = Field("paper-voxel", description="preset whose settings the others override")
     encoding: Literal["voxel", "cube-springs", "spring"] | None = None
-    sim: dict[str, Number] | None = Field(None, description="simulation settings to override")
-    cube_options: list[tuple[Number, Number, Number, Number]] | None = None
+    sim: dict[str, Number] | None = Field(
+        None, max_length=32, description="simulation settings to override"
+    )
+    cube_options: list[tuple[Number, Number, Number, Number]] | None = Field(
+        None, max_length=64, description="the cube's spring options [k, b, w, c] (at most 64)"
+    )
 
 
 def _optional(info: Any) -> Any:

@@ -10,6 +10,7 @@ import math
 import re
 from typing import Any
 
+from softevo.api.cost import total_cost
 from softevo.api.settings import Limits
 from softevo.core.config import ConfigError, RunConfig, resolve
 
@@ -37,7 +38,25 @@ def run_config(request: dict[str, Any], limits: Limits, prefix: tuple[str, ...] 
         loc: list[str | int] = [*prefix, *(match.group(1).split(".") if match else [])]
         raise RequestError(loc, message) from None
     check_limits(config, limits, prefix)
+    check_budget([config], limits, [*prefix, "generations"])
     return config
+
+
+def check_budget(configs: list[RunConfig], limits: Limits, loc: list[str | int]) -> None:
+    """One run's, or a sweep's whole, cost against the service's budget (`api.cost`)."""
+    cost = total_cost(configs)
+    what = "this run" if len(configs) == 1 else f"these {len(configs)} runs"
+    if cost.spring_steps > limits.max_spring_steps:
+        raise RequestError(loc, f"{what} could simulate {cost.spring_steps:.3g} spring-steps "
+                           f"(springs of the box x steps x simulations), over the budget of "
+                           f"{limits.max_spring_steps:.3g}; ask for less (population, "
+                           "generations, shape, sim.duration, sim.dt) or raise "
+                           "SOFTEVO_MAX_SPRING_STEPS")  # fmt: skip
+    if cost.stored_bytes > limits.max_stored_bytes:
+        raise RequestError(loc, f"{what} would store about {cost.stored_bytes:.3g} bytes of "
+                           f"individuals, over the budget of {limits.max_stored_bytes:.3g}; ask "
+                           "for less (population, generations, shape) or raise "
+                           "SOFTEVO_MAX_STORED_BYTES")  # fmt: skip
 
 
 def check_limits(config: RunConfig, limits: Limits, prefix: tuple[str, ...] = ()) -> None:

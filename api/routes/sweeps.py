@@ -12,7 +12,7 @@ from softevo.api.db import Database
 from softevo.api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TokenDep
 from softevo.api.routes.runs import BAD_BODY
 from softevo.api.schemas import Message, SweepBox, SweepCreate, SweepPublic
-from softevo.api.validation import RequestError, run_config
+from softevo.api.validation import RequestError, check_budget, run_config
 from softevo.core.status import RunStatus
 
 router = APIRouter(prefix="/sweeps", tags=["sweeps"])
@@ -87,6 +87,7 @@ def create_sweep(
                     {**request, "shape": shape, "seed": seed}, settings.limits, ("shapes", str(i))
                 )
             )
+    check_budget(configs, settings.limits, ["seeds"])  # the sweep's runs together
     stored = body.model_dump(mode="json", exclude_unset=True)
     stored.update(shapes=[list(s) for s in shapes], seeds=seeds)
     sweep_id, _ = store.create_sweep(db, stored, configs, settings.limits.max_queued)

@@ -1,0 +1,74 @@
+"""The cost budget (`softevo.api.cost`): a run or a sweep that could cost more simulated
+spring-steps or stored bytes than the service allows is refused before anything is queued, with
+both figures and the setting that raises the limit; the paper's own experiments fit."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+from fastapi.testclient import TestClient
+
+from softevo.api.cost import box_springs, run_cost
+from softevo.api.settings import Limits
+from softevo.core.config import PAPER_NINE_SHAPES, resolve
+from softevo.core.lattice import full_lattice
+
+
+@pytest.mark.parametrize("shape", [(1, 1, 1), (4, 4, 4), (3, 3, 6), (9, 9, 2), (2, 5, 3)])
+def test_box_springs_counts_the_full_lattice(shape: tuple[int, int, int]) -> None:
+    assert box_springs(shape) == full_lattice(shape).n_springs
+
+
+def test_the_papers_experiments_fit_the_default_budget() -> None:
+    configs = [
+        resolve({"preset": "paper-voxel", "shape": list(shape), "seed": seed})
+        for shape in PAPER_NINE_SHAPES
+        for seed in (1, 2, 3)
+    ]
+    assert sum(run_cost(config).spring_steps for config in configs) < 1e13
+    assert run_cost(resolve({"preset": "paper-cube"})).spring_steps < 1e13
+
+
+@pytest.mark.parametrize(
+    ("body", "words"),
+    [
+        # the issue's examples: about 3 CPU-years of simulation, and 16 GB of genomes
+        ({"preset": "paper-voxel", "shape": [8, 8, 8], "population": 1000,
+          "generations": 1000, "sim": {"dt": 1e-4, "duration": 60.0}},
+         ["4.47e+15 spring-steps", "SOFTEVO_MAX_SPRING_STEPS"]),
+        ({"preset": "quick", "encoding": "spring", "shape": [8, 8, 8], "population": 1000,
+          "generations": 1000, "sim": {"duration": 0.5, "settle_time": 0.1}},
+         ["1.63e+10 bytes", "SOFTEVO_MAX_STORED_BYTES"]),
+    ],
+)  # fmt: skip
+def test_a_run_over_the_budget_is_refused_with_its_cost(
+    make_client: Callable[..., TestClient], body: dict, words: list[str]
+) -> None:
+    client = make_client()  # the defaults: every other ceiling lets these through
+    response = client.post("/runs", json=body)
+    assert response.status_code == 422, response.text
+    message = response.json()["detail"][0]["msg"]
+    assert all(word in message for word in words), message
+    assert client.get("/runs").json()["total"] == 0
+
+
+def test_a_sweep_counts_the_sum_of_its_runs(make_client: Callable[..., TestClient]) -> None:
+    one = run_cost(resolve({"preset": "quick", "seed": 1})).spring_steps
+    client = make_client(limits=Limits(max_spring_steps=one * 2.5))  # two runs fit, not three
+    fits = client.post("/sweeps", json={"preset": "quick", "shapes": [[3, 3, 3]], "seeds": [1, 2]})
+    assert fits.status_code == 201, fits.text
+    over = client.post("/sweeps", json={"preset": "quick", "shapes": [[3, 3, 3]],
+                                        "seeds": [1, 2, 3]})  # fmt: skip
+    assert over.status_code == 422 and "these 3 runs" in over.json()["detail"][0]["msg"]
+    assert client.get("/sweeps/2").status_code == 404  # nothing of it was queued
+
+
+def test_every_list_in_a_body_is_bounded(make_client: Callable[..., TestClient]) -> None:
+    client = make_client()
+    options = [[1000.0, 0.0, 1.0, 0.0]] * 65
+    response = client.post("/runs", json={"preset": "paper-cube", "cube_options": options})
+    assert response.status_code == 422 and "cube_options" in str(response.json()["detail"])
+    many = {f"k{i}": 1.0 for i in range(33)}
+    response = client.post("/runs", json={"preset": "quick", "sim": many})
+    assert response.status_code == 422 and "sim" in str(response.json()["detail"])
