@@ -1,18 +1,25 @@
 """The job class every `softevo worker` uses: it runs softevo's own job functions and nothing
 else. RQ names a job's function and callbacks by import path, so anyone who can write to Redis
 could otherwise have a worker run `os.system`; such a job fails here, before anything is
-imported, with a log line, and the worker goes on with the next job."""
+imported, with a log line, and the worker goes on with the next job. A job hash that cannot be
+read at all is moved aside (`softevo:malformed:<id>`), logged, and skipped."""
 
 from __future__ import annotations
 
+import contextlib
 import logging
 from typing import Any, ClassVar
 
+from redis.exceptions import RedisError
+from rq.exceptions import NoSuchJobError
 from rq.job import Job
 
 from softevo.worker.queue import JOB_FUNCTIONS
 
 log = logging.getLogger("softevo.worker")
+#: Where a job hash that cannot be read is kept for inspection (a week), instead of the queue.
+MALFORMED_PREFIX = "softevo:malformed:"
+MALFORMED_TTL = 7 * 24 * 3600
 
 
 class RefusedJobError(RuntimeError):
@@ -20,9 +27,21 @@ class RefusedJobError(RuntimeError):
 
 
 class SoftevoJob(Job):
-    """An RQ job restricted to `allowed` functions, with no callbacks."""
+    """An RQ job restricted to `allowed` functions, with no callbacks; a job hash that cannot be
+    read (garbage dates, data or fields) is moved aside instead of stopping the worker."""
 
     allowed: ClassVar[frozenset[str]] = JOB_FUNCTIONS
+
+    def restore(self, raw_data: Any) -> Any:
+        try:
+            return super().restore(raw_data)
+        except Exception as error:  # whatever is in the hash, never a reason for the worker to stop
+            moved = f"{MALFORMED_PREFIX}{self.id}"
+            with contextlib.suppress(RedisError):
+                self.connection.rename(self.key, moved)
+                self.connection.expire(moved, MALFORMED_TTL)
+            log.warning("malformed job %s moved aside to %s: %s", self.id, moved, error)
+            raise NoSuchJobError(f"job {self.id} is malformed and was moved aside") from None
 
     @property
     def func(self) -> Any:

@@ -60,3 +60,41 @@ def test_a_worker_refuses_any_function_but_softevos(
     assert np.array_equal(result.fitness, expected, equal_nan=True)
     assert result.worker == "guard"
     connection.close()
+
+
+def test_a_malformed_job_never_stops_a_worker(redis_server: RedisServer, workers: Workers) -> None:
+    """A job hash with a garbage date is moved aside (`softevo:malformed:<id>`), one with
+    garbage data fails into RQ's failed registry; the worker, and one started after them, go on
+    to evaluate a real batch."""
+    connection = connect(redis_server.url)
+    queue_key = f"rq:queue:{QUEUE}"
+    connection.sadd("rq:queues", queue_key)
+    connection.hset(
+        "rq:job:bad-date",
+        mapping={"data": "[1,2]", "created_at": "garbage", "status": "queued", "origin": QUEUE},
+    )
+    connection.hset("rq:job:bad-data", mapping={
+        "data": "not json", "created_at": "2026-12-01T00:00:00.000000Z", "status": "queued",
+        "origin": QUEUE})  # fmt: skip
+    connection.rpush(queue_key, "bad-date", "bad-data")
+    workers.start("first")
+    workers.wait_ready("first")
+    deadline = time.monotonic() + 30
+    queue = Queue(QUEUE, connection=connection, serializer=SERIALIZER)
+    while not (
+        connection.exists("softevo:malformed:bad-date")
+        and "bad-data" in queue.failed_job_registry.get_job_ids()
+    ):
+        assert time.monotonic() < deadline, workers.log("first")
+        time.sleep(0.05)
+    assert "malformed job bad-date moved aside" in workers.log("first")
+    workers.start("second")  # its start-up clean-up meets whatever is left: it must not die
+    workers.wait_ready("second")
+    evolution = Evolution.start(resolve({"preset": "quick", "population": 3, "seed": 4}))
+    files = [robot_to_json(evolution.robot(item)) for item in evolution.individuals()]
+    with RQEvaluator(redis_server.url, poll_seconds=0.2) as evaluator:
+        result = evaluator.evaluate_batch(files, "after-the-poison")
+    expected = SerialEvaluator().evaluate_batch(files).fitness
+    assert np.array_equal(result.fitness, expected, equal_nan=True)
+    assert workers.processes["first"].poll() is None and workers.processes["second"].poll() is None
+    connection.close()
