@@ -90,15 +90,20 @@ def evaluate_in_batches(
     on_batch: Callable[[list[int], BatchResult], None] | None = None,
 ) -> np.ndarray:
     """Every file's speed (in order), evaluated in batches of at most `batch_size`, at least
-    `evaluator.capacity()` of them, at most `in_flight` at once, one thread each. `check` is
-    called while they run (it raises to stop: queued batches are dropped); `on_batch` hears of
-    each batch as it lands (its positions in `robot_files`, its result)."""
+    `evaluator.capacity()` of them, at most `in_flight` (and two per worker) at once, one thread
+    each. `check` is called while they run (it raises to stop: batches not yet handed to the
+    evaluator are dropped); `on_batch` hears of each batch as it lands (its positions in
+    `robot_files`, its result)."""
     files = list(robot_files)
     fitness = np.full(len(files), np.nan)
     if not files:
         return fitness
-    batches = split_evenly(range(len(files)), batch_size, evaluator.capacity())
-    executor = ThreadPoolExecutor(max(1, min(len(batches), in_flight)), thread_name_prefix="batch")
+    capacity = evaluator.capacity()
+    batches = split_evenly(range(len(files)), batch_size, capacity)
+    # at most two batches per worker handed over at once: enough to keep every worker busy, and
+    # when `check` stops the step (a cancel) the batches not yet handed over are dropped
+    threads = max(1, min(len(batches), in_flight, 2 * capacity))
+    executor = ThreadPoolExecutor(threads, thread_name_prefix="batch")
     try:
         futures: dict[Future[BatchResult], list[int]] = {}
         for batch in batches:

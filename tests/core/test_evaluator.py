@@ -26,3 +26,41 @@ def test_few_new_robots_are_spread_over_the_workers() -> None:
     assert split_evenly([0, 1, 2, 3, 4], 4, 2) == [[0, 1, 2], [3, 4]]
     assert split_evenly([7, 8, 9], 4, 2) == [[7, 8], [9]]
     assert split_evenly(list(range(9)), 4, 1) == [[0, 1, 2], [3, 4, 5], [6, 7, 8]]
+
+
+def test_a_stopped_evaluation_hands_over_no_more_batches() -> None:
+    """Cancel stops the compute: once `check` raises, the batches not yet handed to the
+    evaluator are dropped; at most two per worker were ever out."""
+    import threading
+
+    import numpy as np
+    import pytest
+
+    from softevo.core.evaluator import BatchResult, Evaluator, evaluate_in_batches
+
+    release, started = threading.Event(), []
+
+    class Slow(Evaluator):
+        def evaluate_batch(self, robot_files, key=None):  # type: ignore[no-untyped-def]
+            started.append(key)
+            release.wait(10)
+            return BatchResult(np.zeros(len(robot_files)), "slow", 0.0)
+
+        def capacity(self) -> int:
+            return 2
+
+        def close(self) -> None:
+            pass
+
+    class StoppedError(Exception):
+        pass
+
+    def check() -> None:
+        if len(started) >= 4:
+            raise StoppedError
+
+    files = [{"robot": i} for i in range(80)]  # 20 batches of 4
+    with pytest.raises(StoppedError):
+        evaluate_in_batches(Slow(), files, batch_size=4, check=check)
+    release.set()
+    assert len(started) == 4  # two per worker out; the other 16 never handed over
