@@ -141,8 +141,9 @@ def _install_error_handlers(app: FastAPI) -> None:
         return JSONResponse({"detail": str(error)}, status_code=429, headers={"Retry-After": "30"})
 
     @app.exception_handler(replay.ReplayUnavailableError)
-    async def no_replay(_request: Request, error: replay.ReplayUnavailableError) -> JSONResponse:
-        return JSONResponse({"detail": str(error)}, status_code=503)
+    @app.exception_handler(replay.ReplayBusyError)
+    async def no_replay(_request: Request, error: Exception) -> JSONResponse:
+        return JSONResponse({"detail": str(error)}, status_code=503, headers={"Retry-After": "2"})
 
     @app.exception_handler(RequestError)
     async def bad_request(_request: Request, error: RequestError) -> JSONResponse:

@@ -1,14 +1,17 @@
 """Replays served by the API: computed once per (robot, fps) and remembered, on the RQ workers
 when the service has them (the API process then never loads the physics), else in this process.
 
-A replay is asked for on a plain GET, so it is bounded (at most `MAX_POSITIONS` mass positions,
-`softevo.core.replay`) and the last few are kept, so a dashboard refreshing, or many people
-watching one run, simulates a robot once.
+A replay is asked for on a plain GET, so it is bounded: at most `MAX_POSITIONS` mass positions
+(`softevo.core.replay`), its fps rounded to a bucket, at most `RUNNING_AT_ONCE` simulated at
+the same moment (more are refused with 503, never queued on a request thread), and the last few
+kept within `CACHED_BYTES`, so a dashboard refreshing, or many people watching one run,
+simulates a robot once.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import threading
 from collections import OrderedDict
 from collections.abc import Callable
@@ -19,15 +22,32 @@ from softevo.core.robot_file import robot_to_json
 
 #: Most mass positions one replay carries (frames x masses).
 MAX_POSITIONS = MAX_REPLAY_POSITIONS
-#: Replays remembered (the newest), each at most MAX_POSITIONS positions.
+#: Replays remembered (the newest), and the most bytes they may hold together (estimated).
 CACHED = 8
+CACHED_BYTES = 256 * 2**20
+#: Replays simulated at the same moment; one more asked for is refused (503), not queued, so
+#: no request thread waits on a simulation and `/healthz` and the curve stay fast.
+RUNNING_AT_ONCE = 2
+#: Frame rates replays are recorded at: a request's fps is rounded to the nearest (in ratio), so
+#: any fps does not force a new simulation.
+FPS_BUCKETS = (0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 15.0, 20.0, 30.0, 60.0, 120.0)
 
 #: (robot file, fps, max positions) -> replay; None: in this process (`use_workers` sets it)
 Remote = Callable[[dict[str, Any], float, int], dict[str, Any]]
 _remote: Remote | None = None
 _cache: OrderedDict[tuple[str, float], dict[str, Any]] = OrderedDict()
+_sizes: dict[tuple[str, float], int] = {}
 _lock = threading.Lock()
 _computing: dict[tuple[str, float], threading.Lock] = {}
+_slots = threading.BoundedSemaphore(RUNNING_AT_ONCE)
+
+
+class ReplayUnavailableError(RuntimeError):
+    """The workers gave no replay (none live in time, the job failed): 503, saying why."""
+
+
+class ReplayBusyError(RuntimeError):
+    """RUNNING_AT_ONCE replays are being simulated: try again in a moment (503)."""
 
 
 def use_workers(remote: Remote | None) -> None:
@@ -36,8 +56,13 @@ def use_workers(remote: Remote | None) -> None:
     _remote = remote
 
 
+def fps_bucket(fps: float) -> float:
+    return min(FPS_BUCKETS, key=lambda bucket: abs(math.log(bucket / fps)))
+
+
 def replay(robot: Any, fps: float) -> dict[str, Any]:
-    """Frames at (up to) `fps` per simulated second."""
+    """Frames at (up to) `fps` per simulated second, rounded to a bucket."""
+    fps = fps_bucket(fps)
     key = (json.dumps(robot_to_json(robot), sort_keys=True), fps)
     with _lock:
         if key in _cache:
@@ -48,22 +73,36 @@ def replay(robot: Any, fps: float) -> dict[str, Any]:
         with _lock:
             if key in _cache:
                 return _cache[key]
+        if not _slots.acquire(blocking=False):
+            with _lock:
+                _computing.pop(key, None)
+            raise ReplayBusyError(
+                f"{RUNNING_AT_ONCE} replays are being simulated; try again in a few seconds"
+            )
         try:
             data = _simulate(robot, fps)
         except BaseException:
             with _lock:
                 _computing.pop(key, None)
             raise
-        with _lock:  # cached before its lock goes, so a late caller finds it
-            _cache[key] = data
-            while len(_cache) > CACHED:
-                _cache.popitem(last=False)
-            _computing.pop(key, None)
+        finally:
+            _slots.release()
+        _remember(key, data)
     return data
 
 
-class ReplayUnavailableError(RuntimeError):
-    """The workers gave no replay (none live in time, the job failed): 503, saying why."""
+def _remember(key: tuple[str, float], data: dict[str, Any]) -> None:
+    """Cached before its lock goes, so a late caller finds it; the oldest go past the bounds."""
+    frames = data.get("frames") or [[]]
+    size = 30 * len(frames) * len(frames[0]) + 20 * len(data.get("springs") or [])
+    with _lock:
+        _cache[key], _sizes[key] = data, size
+        while len(_cache) > 1 and (
+            len(_cache) > CACHED or sum(_sizes[k] for k in _cache) > CACHED_BYTES
+        ):
+            old, _ = _cache.popitem(last=False)
+            _sizes.pop(old, None)
+        _computing.pop(key, None)
 
 
 def _simulate(robot: Any, fps: float) -> dict[str, Any]:

@@ -405,3 +405,49 @@ def test_reads_never_load_the_ga_state(client: TestClient) -> None:
         event.remove(engine, "before_cursor_execute", seen)
     selects = [s for s in statements if s.lstrip().upper().startswith("SELECT")]
     assert selects and not [s for s in selects if "ga_state" in s]
+
+
+def test_replays_share_fps_buckets_run_two_at_once_and_keep_to_a_byte_budget(
+    client: TestClient, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Any fps does not force a new simulation (29 and 31 share the 30 bucket); a third replay
+    while two are simulating is a 503 with Retry-After, never a request thread waiting; the
+    cache keeps to its bytes."""
+    import threading
+
+    from softevo.api import replay
+
+    run_id = start(client)
+    wait_for(client, run_id, ("completed",))
+    monkeypatch.setattr(replay, "_cache", type(replay._cache)())
+    calls: list[float] = []
+    gate, real = threading.Event(), replay._simulate
+
+    def slow(robot: Any, fps: float) -> dict[str, Any]:
+        calls.append(fps)
+        if fps < 1:  # the 0.1 and 0.2 buckets wait for the gate: two simulations in progress
+            gate.wait(30)
+        return real(robot, fps)
+
+    monkeypatch.setattr(replay, "_simulate", slow)
+    url = f"/runs/{run_id}/best/replay"
+    first = client.get(url, params={"fps": 29}).json()
+    assert client.get(url, params={"fps": 31}).json() == first and calls == [30.0]
+    held = [threading.Thread(target=client.get, args=(url,), kwargs={"params": {"fps": f}})
+            for f in (0.1, 0.2)]  # fmt: skip
+    for thread in held:
+        thread.start()
+    deadline = time.monotonic() + 30
+    while len(calls) < 3:
+        assert time.monotonic() < deadline
+        time.sleep(0.01)
+    busy = client.get(url, params={"fps": 5})
+    assert busy.status_code == 503 and busy.headers["Retry-After"] == "2"
+    assert "replays are being simulated" in busy.json()["detail"]
+    gate.set()
+    for thread in held:
+        thread.join(30)
+    assert client.get(url, params={"fps": 5}).status_code == 200  # a slot is free again
+    monkeypatch.setattr(replay, "CACHED_BYTES", 1)  # room for the newest only
+    client.get(url, params={"fps": 10})
+    assert len(replay._cache) == 1
