@@ -26,6 +26,7 @@ from softevo.api import dashboard, replay, store
 from softevo.api.body_limit import BodyLimitMiddleware
 from softevo.api.coordinator import Coordinator
 from softevo.api.db import Database, alembic_config, current_revision
+from softevo.api.events import TooManyClientsError, Watches
 from softevo.api.routes import meta, runs, sweeps, views
 from softevo.api.settings import Settings, get_settings
 from softevo.api.validation import RequestError
@@ -96,6 +97,7 @@ def create_app(
         )
         app.state.settings, app.state.db, app.state.coordinator = settings, db, coordinator
         replayer = _replays_on_workers(settings)
+        app.state.watches = Watches(db, settings.limits.max_event_clients)
         coordinator.start()
         # What start-up loaded stays for the life of the process: keep it out of the cyclic
         # collector's full passes, which otherwise add ~100 ms to a large response now and then
@@ -140,6 +142,7 @@ def _install_error_handlers(app: FastAPI) -> None:
     async def queue_full(_request: Request, error: store.QueueFullError) -> JSONResponse:
         return JSONResponse({"detail": str(error)}, status_code=429, headers={"Retry-After": "30"})
 
+    @app.exception_handler(TooManyClientsError)
     @app.exception_handler(replay.ReplayUnavailableError)
     @app.exception_handler(replay.ReplayBusyError)
     async def no_replay(_request: Request, error: Exception) -> JSONResponse:

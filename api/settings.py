@@ -29,6 +29,7 @@ class Limits:
     max_sweep_runs: int = 200
     max_queued: int = 1000  # runs waiting to start; more are refused with 429
     max_body_bytes: int = 1_048_576  # a request body over this is refused with 413
+    max_event_clients: int = 500  # open event streams (GET /runs/{id}/events) of this process
     # one accepted run or sweep (the sum of its runs), counted before anything runs (api.cost)
     max_spring_steps: float = 1e13  # springs of the box x steps x simulations asked for
     max_stored_bytes: int = 2_000_000_000  # every individual's row with its genome

@@ -245,11 +245,14 @@ def last_event_id(header: str | None) -> int:
     response_class=StreamingResponse,
 )
 def get_events(run_id: RunId, db: DatabaseDep, request: Request) -> StreamingResponse:
-    """Server-sent events: `generation` per committed generation, then `end` with the run."""
+    """Server-sent events: `generation` per committed generation, then `end` with the run
+    (503 when the server already follows SOFTEVO_MAX_EVENT_CLIENTS streams)."""
     store.get_run(db, run_id)
+    watches = request.app.state.watches
+    watches.check_room()
     after = last_event_id(request.headers.get("last-event-id"))
     return StreamingResponse(
-        event_stream(request, db, run_id, after, lambda r: run_public(db, r)),
+        event_stream(request, watches, run_id, after, lambda r: run_public(db, r)),
         media_type="text/event-stream",
         headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"},
     )

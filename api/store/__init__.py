@@ -17,6 +17,7 @@ from softevo.api.store.runs import (
     create_run,
     create_sweep,
     curve,
+    curve_after,
     get_individual,
     get_run,
     get_sweep,
@@ -27,6 +28,7 @@ from softevo.api.store.runs import (
 
 __all__ = [
     "ConflictError", "NotFoundError", "QueueFullError", "RunRecord", "best_individual",
-    "cancel_run", "create_run", "create_sweep", "curve", "driving", "get_individual", "get_run",
-    "get_sweep", "leases", "list_individuals", "list_runs", "progress_counts",
+    "cancel_run", "create_run", "create_sweep", "curve", "curve_after", "driving",
+    "get_individual", "get_run", "get_sweep", "leases", "list_individuals", "list_runs",
+    "progress_counts",
 ]  # fmt: skip

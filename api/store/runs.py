@@ -176,6 +176,17 @@ def curve(db: Database, run_id: int) -> list[dict[str, Any]]:
         return [{column: getattr(row, column) for column in CURVE_COLUMNS} for row in rows]
 
 
+def curve_after(db: Database, run_id: int, after: int) -> list[dict[str, Any]]:
+    """The committed generations after `after`, in order (what an event stream has not sent)."""
+    with db.read() as session:
+        rows = session.scalars(
+            select(Generation)
+            .where(Generation.run_id == run_id, Generation.generation > after)
+            .order_by(Generation.generation)
+        )
+        return [{column: getattr(row, column) for column in CURVE_COLUMNS} for row in rows]
+
+
 def individual_json(row: Individual, population: int) -> dict[str, Any]:
     return {
         "id": row.generation * population + row.index,

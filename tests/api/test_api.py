@@ -451,3 +451,51 @@ def test_replays_share_fps_buckets_run_two_at_once_and_keep_to_a_byte_budget(
     monkeypatch.setattr(replay, "CACHED_BYTES", 1)  # room for the newest only
     client.get(url, params={"fps": 10})
     assert len(replay._cache) == 1
+
+
+def test_event_clients_share_one_watcher_and_are_capped(
+    make_client: Callable[..., TestClient],
+) -> None:
+    """Ten clients following a run read the database as one does (one watcher per run); past
+    SOFTEVO_MAX_EVENT_CLIENTS a new stream is a 503."""
+    import threading
+
+    from softevo.api import events
+    from softevo.api.settings import Limits
+
+    client = make_client(limits=Limits(max_event_clients=10))
+    run_id = start(client, generations=40)
+    statements: list[str] = []
+
+    def seen(_conn: Any, _cursor: Any, statement: str, *_args: Any) -> None:
+        if "FROM generations" in statement:
+            statements.append(statement)
+
+    engine = client.app.state.db.engine  # type: ignore[attr-defined]
+    event.listen(engine, "before_cursor_execute", seen)
+    ends: list[int] = []
+
+    def follow() -> None:
+        with client.stream("GET", f"/runs/{run_id}/events") as stream:
+            text = "".join(stream.iter_text())
+        ends.append(text.count("event: generation") if "event: end" in text else -1)
+
+    followers = [threading.Thread(target=follow) for _ in range(10)]
+    started = time.monotonic()
+    for thread in followers:
+        thread.start()
+    deadline = time.monotonic() + 30
+    while client.app.state.watches.clients < 10:  # type: ignore[attr-defined]
+        assert time.monotonic() < deadline
+        time.sleep(0.01)
+    refused = client.get(f"/runs/{run_id}/events")
+    assert refused.status_code == 503 and "SOFTEVO_MAX_EVENT_CLIENTS" in refused.json()["detail"]
+    for thread in followers:
+        thread.join(120)
+    elapsed = time.monotonic() - started
+    event.remove(engine, "before_cursor_execute", seen)
+    assert ends == [40] * 10  # every client saw every generation, then the end
+    polls = elapsed / events.POLL_SECONDS + 5  # one watcher's reads, at most
+    # the coordinator's own writes and reads of `generations` come on top; ten pollers would
+    # read ten times as often
+    assert len(statements) < 2 * polls, (len(statements), polls)
