@@ -41,6 +41,7 @@ from softevo.worker.queue import (
     REPLAY_FUNCTION,
     SERIALIZER,
     connect,
+    engine_fingerprint,
     result_key,
 )
 
@@ -62,6 +63,7 @@ class RQEvaluator(Evaluator):
         max_attempts: int = 3,
         poll_seconds: float = 1.0,
         job_function: str = JOB_FUNCTION,
+        engine: str | None = None,
     ) -> None:
         self.connection = connect(redis_url)
         self.queue = Queue(queue, connection=self.connection, serializer=SERIALIZER)
@@ -71,6 +73,7 @@ class RQEvaluator(Evaluator):
         self.max_attempts = max_attempts
         self.poll_seconds = poll_seconds
         self.job_function = job_function
+        self.engine = engine or engine_fingerprint()  # every job carries it (`SoftevoJob`)
         self._seconds_per_unit: float | None = None  # measured: see `work_units`
         self._held_since: dict[str, float] = {}  # job id -> when first seen taken, not started
         self._lock = threading.Lock()
@@ -86,6 +89,8 @@ class RQEvaluator(Evaluator):
             return BatchResult(np.empty(0), "", 0.0)
         key = key or batch_digest(files)
         payload = self.collect(files, key)
+        if "refused" in payload:  # a worker of another engine: never a silently other curve
+            raise EngineMismatchError(str(payload["refused"]))
         if "fitness" in payload:
             fitness = from_nulls(payload["fitness"])
             return BatchResult(fitness, str(payload.get("worker", "")), float(payload["seconds"]))
@@ -151,6 +156,7 @@ class RQEvaluator(Evaluator):
             args=(key, files, *extra),
             job_id=job_id,
             job_timeout=timeout,
+            meta={"engine": self.engine},
             result_ttl=600,
             failure_ttl=3600,
         )
@@ -293,12 +299,19 @@ def parse_result(raw: bytes | str, robots: int) -> dict[str, Any] | None:
         if type(seconds) not in (int, float) or seconds < 0:
             return None
         return payload
+    if isinstance(payload.get("refused"), str):
+        return payload
     return payload if isinstance(payload.get("error"), str) else None
 
 
 def _refuse_constant(name: str) -> Any:
     """NaN and Infinity are not JSON: a failed robot's speed is null."""
     raise ValueError(f"{name} in a result")
+
+
+class EngineMismatchError(RuntimeError):
+    """A worker computes with another engine (softevo, numpy, numba or llvmlite version) than
+    this side: the run fails, saying both, rather than mixing fitness of two engines."""
 
 
 class ReplayUnavailableError(RuntimeError):

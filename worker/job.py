@@ -7,6 +7,7 @@ read at all is moved aside (`softevo:malformed:<id>`), logged, and skipped."""
 from __future__ import annotations
 
 import contextlib
+import json
 import logging
 from typing import Any, ClassVar
 
@@ -14,9 +15,10 @@ from redis.exceptions import RedisError
 from rq.exceptions import NoSuchJobError
 from rq.job import Job
 
-from softevo.worker.queue import JOB_FUNCTIONS
+from softevo.worker.queue import JOB_FUNCTIONS, RESULT_TTL, engine_fingerprint, result_key
 
 log = logging.getLogger("softevo.worker")
+ENGINE = engine_fingerprint()
 #: Where a job hash that cannot be read is kept for inspection (a week), instead of the queue.
 MALFORMED_PREFIX = "softevo:malformed:"
 MALFORMED_TTL = 7 * 24 * 3600
@@ -54,6 +56,9 @@ class SoftevoJob(Job):
             )
             if name
         ]
+        engine = (self.meta or {}).get("engine")
+        if self.func_name in self.allowed and not callbacks and engine != ENGINE:
+            self._refuse_engine(engine)
         if self.func_name not in self.allowed or self.instance is not None or callbacks:
             what = f"function {self.func_name!r}" + (
                 f", callbacks {callbacks}" if callbacks else ""
@@ -61,6 +66,21 @@ class SoftevoJob(Job):
             log.warning("refused job %s: %s is not one of softevo's jobs", self.id, what)
             raise RefusedJobError(f"refused: {what} is not one of softevo's jobs")
         return super().func
+
+    def _refuse_engine(self, engine: Any) -> None:
+        """Another engine asked: said in the log and on the batch's result list (the API then
+        fails the run with both fingerprints), and the job fails."""
+        message = f"this worker computes with [{ENGINE}], the job was sent by [{engine}]"
+        log.warning("refused job %s: %s", self.id, message)
+        key = self.args[0] if self.args and isinstance(self.args[0], str) else None
+        if key is not None:
+            payload = {"refused": message, "worker": self.worker_name or "", "job": self.id}
+            with contextlib.suppress(RedisError):
+                pipe = self.connection.pipeline()
+                pipe.rpush(result_key(key), json.dumps(payload))
+                pipe.expire(result_key(key), RESULT_TTL)
+                pipe.execute()
+        raise RefusedJobError(f"refused: {message}")
 
     # callbacks are never imported or run (a job that names one is refused above)
     @property

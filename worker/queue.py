@@ -20,6 +20,21 @@ SERIALIZER = JSONSerializer
 RESULT_TTL = 3600
 
 
+def engine_fingerprint() -> str:
+    """What shapes a fitness's arithmetic: softevo's version and those of numpy, numba and
+    llvmlite. A job carries the API's; a worker with another refuses it, so one run is computed
+    by one engine (read from package metadata: the physics is not imported for it)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    parts = []
+    for package in ("softevo", "numpy", "numba", "llvmlite"):
+        try:
+            parts.append(f"{package} {version(package)}")
+        except PackageNotFoundError:
+            parts.append(f"{package} ?")
+    return ", ".join(parts)
+
+
 def result_key(batch_key: str) -> str:
     """The Redis list a batch's results are pushed onto, by whichever attempt finishes first."""
     return f"softevo:result:{batch_key}"

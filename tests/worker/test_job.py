@@ -98,3 +98,34 @@ def test_a_malformed_job_never_stops_a_worker(redis_server: RedisServer, workers
     assert np.array_equal(result.fitness, expected, equal_nan=True)
     assert workers.processes["first"].poll() is None and workers.processes["second"].poll() is None
     connection.close()
+
+
+def test_a_worker_of_another_engine_refuses_the_job_and_the_run_is_told(
+    redis_server: RedisServer, workers: Workers
+) -> None:
+    """A job carries the sender's engine fingerprint (softevo, numpy, numba, llvmlite
+    versions); a worker with another refuses it, says so in its log and on the batch's result
+    list, and the sender raises, naming both, instead of mixing fitness of two engines."""
+    import pytest
+
+    from softevo.worker.evaluator import EngineMismatchError
+    from softevo.worker.queue import engine_fingerprint
+
+    workers.start("other")
+    workers.wait_ready("other")
+    evolution = Evolution.start(resolve({"preset": "quick", "population": 2, "seed": 5}))
+    files = [robot_to_json(evolution.robot(item)) for item in evolution.individuals()]
+    old = "softevo 0.0.1, numpy 1.26.0, numba 0.60.0, llvmlite 0.43.0"
+    with (
+        RQEvaluator(redis_server.url, poll_seconds=0.2, engine=old) as evaluator,
+        pytest.raises(EngineMismatchError) as refused,
+    ):
+        evaluator.evaluate_batch(files, "old-engine")
+    assert old in str(refused.value) and engine_fingerprint() in str(refused.value)
+    assert "refused job softevo-old-engine-a1" in workers.log("other")
+    with RQEvaluator(redis_server.url, poll_seconds=0.2) as evaluator:  # the same engine: fine
+        result = evaluator.evaluate_batch(files, "same-engine")
+    assert np.array_equal(
+        result.fitness, SerialEvaluator().evaluate_batch(files).fitness, equal_nan=True
+    )
+    assert workers.processes["other"].poll() is None

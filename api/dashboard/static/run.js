@@ -18,14 +18,12 @@ export async function runView(runId) {
     h("div", { class: "grid" }, replayPanel,
       h("div", { class: "panel" }, h("h3", {}, "Settings"), settings)));
 
-  const showSummary = () => summary.replaceChildren(h("div", { class: "panel" },
-    status(run.status), " ", progressBar(run.progress.generation, run.progress.generations),
-    ` best ${fmt(run.progress.best_fitness)} m/s`,
-    run.progress.best_generation !== null ? ` (generation ${run.progress.best_generation})` : "",
-    `, ${run.progress.evaluations} simulations, ${run.progress.saved} from the cache`,
-    run.progress.eta_seconds ? `, about ${Math.round(run.progress.eta_seconds)} s left` : "",
-    run.error ? h("div", { class: "error" }, run.error) : "",
-    " ", ["queued", "running"].includes(run.status) ? cancelButton(runId, async () => { run = await api(`/runs/${runId}`); showSummary(); }) : "",
+  // built once: only the text changes, so the Cancel button stays put (and clickable) while
+  // the run reports a generation every fraction of a second
+  const summaryText = h("span", {});
+  const summaryError = h("div", { class: "error" });
+  const cancel = cancelButton(runId, async () => { run = await api(`/runs/${runId}`); showSummary(); });
+  summary.replaceChildren(h("div", { class: "panel" }, cancel, " ", summaryText, summaryError,
     h("div", { class: "links" },
       h("a", { href: `/runs/${runId}/curve?format=csv` }, "curve (CSV)"),
       h("a", { href: `/runs/${runId}/best` }, "best robot file"),
@@ -33,6 +31,17 @@ export async function runView(runId) {
       h("a", { href: `/runs/${runId}/figures/population.png` }, "population (PNG)"),
       h("a", { href: `/runs/${runId}/figures/diversity.png` }, "diversity (PNG)"),
       run.sweep_id ? h("a", { href: `#/sweeps/${run.sweep_id}` }, `sweep ${run.sweep_id}`) : "")));
+  const showSummary = () => {
+    summaryText.replaceChildren(
+      status(run.status), " ", progressBar(run.progress.generation, run.progress.generations),
+      ` best ${fmt(run.progress.best_fitness)} m/s`,
+      run.progress.best_generation !== null ? ` (generation ${run.progress.best_generation})` : "",
+      `, ${run.progress.evaluations} simulations, ${run.progress.saved} from the cache`,
+      run.progress.eta_seconds ? `, about ${Math.round(run.progress.eta_seconds)} s left` : "");
+    summaryError.textContent = run.error || "";
+    summaryError.hidden = !run.error;
+    cancel.hidden = !["queued", "running"].includes(run.status);
+  };
   showSummary();
 
   // the data the charts draw, grown generation by generation
