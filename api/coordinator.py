@@ -20,10 +20,11 @@ import time
 import uuid
 from dataclasses import dataclass
 
-from sqlalchemy.exc import InterfaceError, OperationalError
+from sqlalchemy.exc import InterfaceError, InternalError, OperationalError
 
 from softevo.api import store
 from softevo.api.db import Database
+from softevo.api.faults import Faults
 from softevo.api.store.driving import Lease, LeaseLostError
 from softevo.core.config import RunConfig
 from softevo.core.evaluator import BatchResult, Evaluator
@@ -48,6 +49,7 @@ class Driving:
     batch_size: int
     in_flight: int
     stopping: threading.Event
+    faults: Faults
 
 
 class RunDriver(Hooks):
@@ -107,8 +109,8 @@ class RunDriver(Hooks):
             self._drive()
         except Stop as stop:
             log.info("run %s: driver stopped (%s)", self.run_id, stop)
-        except (OperationalError, InterfaceError):  # database away: the lease expires, retried
-            log.exception("run %s: database error; the run will be taken over", self.run_id)
+        except (OperationalError, InterfaceError, InternalError) as error:  # the database: said
+            self.driving.faults.record(error, f"run {self.run_id}")
         except Exception as error:  # any bug or evaluator failure fails the run
             log.exception("run %s failed", self.run_id)
             try:
@@ -148,6 +150,7 @@ class RunDriver(Hooks):
             step.stats.to_json(), cached, stored, None if best is None else (best[1], best[2]),
             done, step.seconds,
         )  # fmt: skip
+        self.driving.faults.clear()  # a generation committed: the database takes writes
 
 
 class Coordinator:
@@ -172,7 +175,10 @@ class Coordinator:
         self.owner = f"{socket.gethostname()}:{os.getpid()}:{uuid.uuid4().hex[:8]}"
         self.stopping = threading.Event()
         lease = Lease(self.owner, lease_seconds)
-        self.driving = Driving(db, evaluator, lease, batch_size, in_flight, self.stopping)
+        self.faults = Faults()
+        self.driving = Driving(
+            db, evaluator, lease, batch_size, in_flight, self.stopping, self.faults
+        )
         self._wake = threading.Event()
         self._drivers: dict[int, tuple[RunDriver, threading.Thread]] = {}
         self._lock = threading.Lock()
@@ -241,7 +247,9 @@ class Coordinator:
                     self._heartbeat()
                     last_heartbeat = time.monotonic()
                 self._schedule()
-            except Exception:  # e.g. database away: retry at the next tick
+            except (OperationalError, InterfaceError, InternalError) as error:  # next tick again
+                self.faults.record(error, "coordinator")
+            except Exception:
                 log.exception("coordinator tick failed")
             with self._ticked:
                 self.ticks += 1
@@ -272,6 +280,7 @@ class Coordinator:
                 self.db, run_id, self.owner, self.lease_seconds
             ):
                 continue
+            self.faults.clear()  # it took a write: the database is writable again
             driver = RunDriver(self.driving, run_id)
             thread = threading.Thread(target=driver.run, name=f"run-{run_id}", daemon=True)
             with self._lock:

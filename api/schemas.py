@@ -81,6 +81,9 @@ class RunProgress(BaseModel):
 class RunPublic(BaseModel):
     id: int
     status: RunStatus
+    problem: str | None = Field(
+        None, description="why an active run does not progress (the database cannot be written)"
+    )
     preset: str | None
     seed: int
     sweep_id: int | None

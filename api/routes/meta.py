@@ -38,6 +38,9 @@ def healthz(
             client.ping()
         except Exception as error:
             redis = f"down: {type(error).__name__}"
+    fault = coordinator.faults.current  # the coordinator's last write failed: said here
+    if database == "ok" and fault is not None:
+        database = f"cannot write: {fault}"
     healthy = database == "ok" and redis in ("ok", "not configured")
     if not healthy:
         response.status_code = 503

@@ -43,7 +43,7 @@ BAD_BODY: dict[int | str, dict[str, Any]] = {
 }
 
 
-def run_public(db: Database, run: store.RunRecord) -> RunPublic:
+def run_public(db: Database, run: store.RunRecord, problem: str | None = None) -> RunPublic:
     counts = store.progress_counts(db, run.id)
     rate = run.evaluations / run.compute_seconds if run.compute_seconds > 0 else None
     per_generation = run.compute_seconds / run.generations_done if run.generations_done else None
@@ -53,6 +53,7 @@ def run_public(db: Database, run: store.RunRecord) -> RunPublic:
     return RunPublic(
         id=run.id,
         status=run.status,  # type: ignore[arg-type]
+        problem=problem,
         preset=run.preset,
         seed=run.seed,
         sweep_id=run.sweep_id,
@@ -115,9 +116,12 @@ def list_runs(
 
 
 @router.get("/{run_id}", responses=NOT_FOUND)
-def get_run(run_id: RunId, db: DatabaseDep) -> RunPublic:
-    """Status and progress: generation g of G, evaluations, rate, best fitness, ETA."""
-    return run_public(db, store.get_run(db, run_id))
+def get_run(run_id: RunId, db: DatabaseDep, coordinator: CoordinatorDep) -> RunPublic:
+    """Status and progress: generation g of G, evaluations, rate, best fitness, ETA, and why an
+    active run does not progress when this server cannot write its database."""
+    run = store.get_run(db, run_id)
+    problem = coordinator.faults.current if RunStatus(run.status).active else None
+    return run_public(db, run, f"the database cannot be written: {problem}" if problem else None)
 
 
 @router.post(
