@@ -180,6 +180,7 @@ class Health(BaseModel):
     status: Literal["ok", "degraded"]
     database: str
     redis: str
+    workers: str | None = Field(None, description="with Redis: the queue's live workers")
     coordinator: dict[str, Any] | None
 
 

@@ -47,6 +47,7 @@ class Settings:
     batch_size: int = BATCH_SIZE  # robots per evaluator call; fitness is saved batch by batch
     queued_batches: int = IN_FLIGHT  # batches of one run in flight at once
     replay_seconds: float = 600.0  # with Redis: a replay GET waits at most this for a worker
+    no_worker_seconds: float = 60.0  # with Redis: a queue without a live worker this long is said
     lease_seconds: float = 15.0  # a coordinator that stops heartbeating loses its runs after this
     poll_seconds: float = 0.5  # how often the scheduler looks for queued or orphaned runs
     limits: Limits = field(default_factory=Limits)

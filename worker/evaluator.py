@@ -78,6 +78,7 @@ class RQEvaluator(Evaluator):
         self._held_since: dict[str, float] = {}  # job id -> when first seen taken, not started
         self._lock = threading.Lock()
         self._workers = (1, -math.inf)  # (live workers on the queue, when counted)
+        self._empty_since: float | None = None  # when the count was first seen 0
 
     # -- the interface -------------------------------------------------------------------------
 
@@ -108,13 +109,27 @@ class RQEvaluator(Evaluator):
     def capacity(self) -> int:
         """Workers registered on the queue, counted at most every 5 s (the last count, or 1,
         while Redis is away): batches are cut so that each of them can have one."""
+        return max(1, self._count())
+
+    def _count(self) -> int:
+        """Live workers on the queue (the last count while Redis is away), at most every 5 s."""
         count, when = self._workers
         if time.monotonic() - when < 5.0:
             return count
         with contextlib.suppress(REDIS_DOWN):
-            count = max(1, Worker.count(connection=self.connection, queue=self.queue))
+            count = Worker.count(connection=self.connection, queue=self.queue)
+            if count > 0:
+                self._empty_since = None
+            elif self._empty_since is None:
+                self._empty_since = time.monotonic()
         self._workers = (count, time.monotonic())
         return count
+
+    def without_workers(self) -> float:
+        """Seconds the queue has had no live worker (0 while it has one): the service says so
+        in `/healthz` and on its runs past a deadline, instead of waiting in silence."""
+        self._count()
+        return 0.0 if self._empty_since is None else time.monotonic() - self._empty_since
 
     def close(self) -> None:
         self.connection.close()

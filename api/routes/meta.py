@@ -4,8 +4,10 @@ from __future__ import annotations
 
 from fastapi import APIRouter, Response
 
+from softevo.api.coordinator import Coordinator
 from softevo.api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TrustedDep
 from softevo.api.schemas import Health, Preset
+from softevo.api.settings import Settings
 from softevo.core.config import PRESET_DESCRIPTIONS, PRESETS
 
 router = APIRouter(tags=["meta"])
@@ -44,16 +46,32 @@ def healthz(
     healthy = database == "ok" and redis in ("ok", "not configured")
     if not healthy:
         response.status_code = 503
+    workers = idle_workers(coordinator, settings)
+    internals = {"owner": coordinator.owner, "driving": coordinator.active}
     if not trusted:
-        database, redis = (part.split(":")[0] for part in (database, redis))
+        database, redis, internals = database.split(":")[0], redis.split(":")[0], None
     return Health(
         status="ok" if healthy else "degraded",
         database=database,
         redis=redis,
-        coordinator={"owner": coordinator.owner, "driving": coordinator.active}
-        if trusted
-        else None,
+        workers=workers,
+        coordinator=internals,
     )
+
+
+def idle_workers(coordinator: Coordinator, settings: Settings) -> str | None:
+    """With Redis: "ok" while the queue has a live worker; past SOFTEVO_NO_WORKER_SECONDS
+    without one, how long (said on `/healthz` and on active runs). None without Redis."""
+    without = getattr(coordinator.driving.evaluator, "without_workers", None)
+    if without is None:
+        return None
+    try:
+        seconds = without()
+    except Exception:  # Redis away: `redis` says so already
+        return None
+    if seconds < settings.no_worker_seconds:
+        return "ok"
+    return f"no live worker on the queue for {seconds:.0f} s: start `softevo worker`"
 
 
 @router.get("/presets")

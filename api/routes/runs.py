@@ -15,6 +15,7 @@ from softevo.api.db import Database
 from softevo.api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TokenDep
 from softevo.api.events import event_stream
 from softevo.api.replay import replay
+from softevo.api.routes.meta import idle_workers
 from softevo.api.schemas import (
     Curve,
     IndividualDetail,
@@ -116,12 +117,20 @@ def list_runs(
 
 
 @router.get("/{run_id}", responses=NOT_FOUND)
-def get_run(run_id: RunId, db: DatabaseDep, coordinator: CoordinatorDep) -> RunPublic:
+def get_run(
+    run_id: RunId, db: DatabaseDep, coordinator: CoordinatorDep, settings: SettingsDep
+) -> RunPublic:
     """Status and progress: generation g of G, evaluations, rate, best fitness, ETA, and why an
     active run does not progress when this server cannot write its database."""
     run = store.get_run(db, run_id)
-    problem = coordinator.faults.current if RunStatus(run.status).active else None
-    return run_public(db, run, f"the database cannot be written: {problem}" if problem else None)
+    problem = None
+    if RunStatus(run.status).active:
+        fault, workers = coordinator.faults.current, idle_workers(coordinator, settings)
+        if fault is not None:
+            problem = f"the database cannot be written: {fault}"
+        elif workers not in (None, "ok"):
+            problem = workers
+    return run_public(db, run, problem)
 
 
 @router.post(

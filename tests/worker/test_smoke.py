@@ -139,3 +139,38 @@ def test_a_replay_with_no_live_worker_is_a_503_not_a_hang(redis_server, tmp_path
         client.post(f"/runs/{run}/cancel")
     assert answer.status_code == 503 and "no result in 1 s" in answer.json()["detail"]
     assert waited < 10
+
+
+def test_a_queue_without_a_live_worker_is_said(redis_server, workers, tmp_path) -> None:
+    """On Redis with no worker, past SOFTEVO_NO_WORKER_SECONDS `/healthz` and the waiting run
+    say so (with what to do), instead of a run that stays running in silence; a worker
+    started then clears it."""
+    import time
+
+    from fastapi.testclient import TestClient
+
+    from softevo.api.app import create_app
+    from softevo.api.settings import Settings
+
+    settings = Settings(
+        database_url=f"sqlite:///{tmp_path / 'api.db'}",
+        redis_url=redis_server.url,
+        poll_seconds=0.05,
+        no_worker_seconds=1.0,
+    )
+    with TestClient(create_app(settings)) as client:
+        run = client.post("/runs", json={"preset": "quick", "population": 4, "generations": 2})
+        run_id = run.json()["id"]
+        deadline = time.monotonic() + 30
+        while "no live worker" not in (client.get("/healthz").json()["workers"] or ""):
+            assert time.monotonic() < deadline, client.get("/healthz").json()
+            time.sleep(0.2)
+        problem = client.get(f"/runs/{run_id}").json()["problem"]
+        assert "no live worker" in problem and "softevo worker" in problem
+        workers.start("late")
+        while client.get(f"/runs/{run_id}").json()["status"] != "completed":
+            assert time.monotonic() < deadline + 60
+            time.sleep(0.1)
+        while client.get("/healthz").json()["workers"] != "ok":  # workers are counted every 5 s
+            assert time.monotonic() < deadline + 80
+            time.sleep(0.2)

@@ -1,0 +1,156 @@
+"""The service under hostile load: `python bench/load.py [--seconds S] [--database D,...]`.
+
+A real `softevo serve` (the in-process pool on every core) while, all at once:
+* a large run evaluates (8x8x8 paper-voxel, population 100: every core busy simulating),
+* 200 clients follow that run's server-sent events,
+* 20 clients ask for replays of distinct individuals at distinct frame rates, again and again,
+* one probe times `GET /healthz` and `GET /runs/{id}/curve`, ten times a second each.
+
+Prints the probes' p50 and p99 latency (ms), how the replay requests were answered (200 or 503)
+and the server's peak resident memory (VmHWM of the API process, and of its pool processes).
+Target (issue 15): p99 under 250 ms for both and peak memory under 1.5 GB.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import os
+import platform
+import statistics
+import tempfile
+import time
+from collections import Counter
+from pathlib import Path
+
+import httpx
+
+from softevo.local_service import LocalService, service_env, start_service
+
+POSTGRES = os.environ.get("SOFTEVO_TEST_POSTGRES", "postgresql://postgres@127.0.0.1:5432/test")
+LARGE = {"preset": "paper-voxel", "shape": [8, 8, 8], "population": 100, "generations": 100,
+         "seed": 1}  # fmt: skip
+SSE_CLIENTS, REPLAY_CLIENTS = 200, 20
+
+
+def peak_kib(pid: int) -> int:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1])
+    return 0
+
+
+def children(pid: int) -> list[int]:
+    found = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            if int(stat.read_text().rsplit(")", 1)[1].split()[1]) == pid:
+                found.append(int(stat.parent.name))
+        except (OSError, ValueError):
+            continue
+    return found
+
+
+async def follow(client: httpx.AsyncClient, run_id: int, stop: asyncio.Event) -> int:
+    events = 0
+    try:
+        async with client.stream("GET", f"/runs/{run_id}/events") as stream:
+            async for line in stream.aiter_lines():
+                events += line.startswith("event: ")
+                if stop.is_set():
+                    break
+    except httpx.HTTPError:
+        pass
+    return events
+
+
+async def replays(client: httpx.AsyncClient, run_id: int, k: int, stop: asyncio.Event,
+                  answers: Counter[int]) -> None:  # fmt: skip
+    fps = (1, 2, 5, 10, 15, 20, 30, 60, 120)[k % 9]
+    n = k
+    while not stop.is_set():
+        try:
+            response = await client.get(f"/runs/{run_id}/individuals/{n}/replay",
+                                        params={"fps": fps}, timeout=120)  # fmt: skip
+            answers[response.status_code] += 1
+        except httpx.HTTPError:
+            answers[0] += 1
+        n += REPLAY_CLIENTS
+        await asyncio.sleep(0.2)
+
+
+async def probe(
+    client: httpx.AsyncClient, path: str, stop: asyncio.Event, out: list[float]
+) -> None:
+    while not stop.is_set():
+        started = time.perf_counter()
+        await client.get(path, timeout=60)
+        out.append(1e3 * (time.perf_counter() - started))
+        await asyncio.sleep(0.1)
+
+
+async def load(local: LocalService, seconds: float) -> dict[str, object]:
+    limits = httpx.Limits(max_connections=SSE_CLIENTS + REPLAY_CLIENTS + 10)
+    async with httpx.AsyncClient(base_url=local.url, limits=limits, timeout=60) as client:
+        run_id = (await client.post("/runs", json=LARGE)).json()["id"]
+        while (await client.get(f"/runs/{run_id}/individuals")).json()["total"] == 0:
+            await asyncio.sleep(0.2)
+        stop, answers = asyncio.Event(), Counter[int]()
+        healthz: list[float] = []
+        curve: list[float] = []
+        tasks = [asyncio.create_task(follow(client, run_id, stop)) for _ in range(SSE_CLIENTS)]
+        tasks += [asyncio.create_task(replays(client, run_id, k, stop, answers))
+                  for k in range(REPLAY_CLIENTS)]  # fmt: skip
+        tasks += [
+            asyncio.create_task(probe(client, "/healthz", stop, healthz)),
+            asyncio.create_task(probe(client, f"/runs/{run_id}/curve", stop, curve)),
+        ]
+        await asyncio.sleep(seconds)
+        stop.set()
+        await client.post(f"/runs/{run_id}/cancel")
+        await asyncio.wait(tasks, timeout=120)
+    pool = [peak_kib(pid) for pid in children(local.process.pid) if Path(f"/proc/{pid}").exists()]
+    api = peak_kib(local.process.pid) / 1024
+    return {"healthz": healthz, "curve": curve, "answers": answers, "api_mib": api,
+            "pool_mib": [kib / 1024 for kib in pool]}  # fmt: skip
+
+
+def p(values: list[float], q: float) -> float:
+    return statistics.quantiles(values, n=100, method="inclusive")[q - 1] if len(values) > 1 else 0
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--seconds", type=float, default=30.0)
+    parser.add_argument("--database", default="sqlite,postgres")
+    args = parser.parse_args()
+    machine = f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
+    print(f"# {machine}, {SSE_CLIENTS} SSE clients, {REPLAY_CLIENTS} replay clients, "
+          f"{args.seconds:g} s")  # fmt: skip
+    for name in args.database.split(","):
+        with tempfile.TemporaryDirectory() as folder:
+            url = f"sqlite:///{Path(folder) / 'load.db'}"
+            if name == "postgres":
+                from softevo.api.db import Database, scratch_postgres
+
+                scratch = scratch_postgres(POSTGRES, "softevo_load")
+                url = scratch.__enter__()
+                Database(url).upgrade()
+            try:
+                with start_service(service_env(database_url=url), Path(folder) / "serve.log",
+                                   "--log-level", "warning") as local:  # fmt: skip
+                    result = asyncio.run(load(local, args.seconds))
+            finally:
+                if name == "postgres":
+                    scratch.__exit__(None, None, None)
+        for probe_name in ("healthz", "curve"):
+            values = result[probe_name]
+            print(f"{name:9} {probe_name:8} n={len(values):4}  p50 {p(values, 50):7.1f} ms  "
+                  f"p99 {p(values, 99):7.1f} ms  max {max(values, default=0):7.1f} ms")  # fmt: skip
+        print(f"{name:9} replays  answers {dict(result['answers'])}")
+        print(f"{name:9} memory   API process peak {result['api_mib']:.0f} MiB, pool processes "
+              f"{', '.join(f'{m:.0f}' for m in result['pool_mib'])} MiB")  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()
