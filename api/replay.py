@@ -10,12 +10,17 @@ simulates a robot once.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
+import os
 import threading
 from collections import OrderedDict
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any
+
+from fastapi import Response
 
 from softevo.core.limits import MAX_REPLAY_POSITIONS
 from softevo.core.robot_file import robot_to_json
@@ -40,6 +45,8 @@ _sizes: dict[tuple[str, float], int] = {}
 _lock = threading.Lock()
 _computing: dict[tuple[str, float], threading.Lock] = {}
 _slots = threading.BoundedSemaphore(RUNNING_AT_ONCE)
+#: a cached replay's JSON, made on first use (with the replay it encodes)
+_encoded: dict[tuple[str, float], tuple[dict[str, Any], bytes]] = {}
 
 
 class ReplayUnavailableError(RuntimeError):
@@ -62,8 +69,8 @@ def fps_bucket(fps: float) -> float:
 
 def replay(robot: Any, fps: float) -> dict[str, Any]:
     """Frames at (up to) `fps` per simulated second, rounded to a bucket."""
-    fps = fps_bucket(fps)
-    key = (json.dumps(robot_to_json(robot), sort_keys=True), fps)
+    key = _key(robot, fps)
+    fps = key[1]
     with _lock:
         if key in _cache:
             _cache.move_to_end(key)
@@ -91,10 +98,35 @@ def replay(robot: Any, fps: float) -> dict[str, Any]:
     return data
 
 
+def replay_response(robot: Any, fps: float, **head: Any) -> Response:
+    """The replay as a JSON response, `head` (run id, fitness, ...) first. The replay's JSON is
+    made once per replay and kept, in this request's thread: a replay is megabytes of numbers,
+    and encoding it on the server's event loop would stall every other request for seconds."""
+    data = replay(robot, fps)
+    key = _key(robot, fps)
+    with _lock:
+        kept = _encoded.get(key)
+    if kept is not None and kept[0] is data:
+        encoded = kept[1]
+    else:
+        encoded = json.dumps(data, separators=(",", ":"), allow_nan=False).encode()
+        with _lock:
+            if _cache.get(key) is data:  # kept as long as the replay is
+                _encoded[key] = (data, encoded)
+    prefix = json.dumps(head, separators=(",", ":"), allow_nan=False)[:-1].encode()
+    body = encoded if not head else prefix + b"," + encoded[1:]
+    return Response(content=body, media_type="application/json")
+
+
+def _key(robot: Any, fps: float) -> tuple[str, float]:
+    return json.dumps(robot_to_json(robot), sort_keys=True), fps_bucket(fps)
+
+
 def _remember(key: tuple[str, float], data: dict[str, Any]) -> None:
     """Cached before its lock goes, so a late caller finds it; the oldest go past the bounds."""
     frames = data.get("frames") or [[]]
-    size = 30 * len(frames) * len(frames[0]) + 20 * len(data.get("springs") or [])
+    # Python lists of floats: about 110 bytes a position (three floats and their list)
+    size = 110 * len(frames) * len(frames[0]) + 100 * len(data.get("springs") or [])
     with _lock:
         _cache[key], _sizes[key] = data, size
         while len(_cache) > 1 and (
@@ -102,6 +134,7 @@ def _remember(key: tuple[str, float], data: dict[str, Any]) -> None:
         ):
             old, _ = _cache.popitem(last=False)
             _sizes.pop(old, None)
+            _encoded.pop(old, None)
         _computing.pop(key, None)
 
 
@@ -113,4 +146,16 @@ def _simulate(robot: Any, fps: float) -> dict[str, Any]:
             raise ReplayUnavailableError(str(error)) from None
     from softevo.core.replay import replay_frames
 
-    return replay_frames(robot, fps, MAX_POSITIONS)
+    # on a thread of lower priority: a replay uses a core for seconds, the API must not wait
+    return _simulators.submit(replay_frames, robot, fps, MAX_POSITIONS).result()
+
+
+def _lower_priority() -> None:
+    """Linux schedules threads on their own: this one yields to the API's (nice 10)."""
+    with contextlib.suppress(AttributeError, OSError):
+        os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), 10)
+
+
+_simulators = ThreadPoolExecutor(
+    RUNNING_AT_ONCE, thread_name_prefix="replay", initializer=_lower_priority
+)

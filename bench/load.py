@@ -68,14 +68,14 @@ async def replays(client: httpx.AsyncClient, run_id: int, k: int, stop: asyncio.
                   answers: Counter[int]) -> None:  # fmt: skip
     fps = (1, 2, 5, 10, 15, 20, 30, 60, 120)[k % 9]
     n = k
-    while not stop.is_set():
+    while not stop.is_set():  # individuals of the first generation (the population is 100)
         try:
             response = await client.get(f"/runs/{run_id}/individuals/{n}/replay",
                                         params={"fps": fps}, timeout=120)  # fmt: skip
             answers[response.status_code] += 1
         except httpx.HTTPError:
             answers[0] += 1
-        n += REPLAY_CLIENTS
+        n = (n + REPLAY_CLIENTS) % LARGE["population"]
         await asyncio.sleep(0.2)
 
 

@@ -11,6 +11,7 @@ A robot that cannot be built or whose simulation blows up has fitness NaN: faile
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import os
 import socket
@@ -78,10 +79,18 @@ def warm_up() -> None:
     simulate(robot)
 
 
+#: How much a pool process yields to the process that owns the pool (os.nice): simulations use
+#: every core, and the API in the parent must still answer at once.
+POOL_NICENESS = 10
+
+
 def _pool_process() -> None:
     """A pool process's start: it exits when its parent dies, however it dies (a SIGKILLed
-    server leaves no simulations running under init), then loads the kernels."""
+    server leaves no simulations running under init), yields the CPU to its parent, then loads
+    the kernels."""
     parent = os.getppid()
+    with contextlib.suppress(OSError):
+        os.nice(POOL_NICENESS)
 
     def watch() -> None:
         while os.getppid() == parent:

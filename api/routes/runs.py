@@ -14,7 +14,7 @@ from softevo.api import store
 from softevo.api.db import Database
 from softevo.api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TokenDep
 from softevo.api.events import event_stream
-from softevo.api.replay import replay
+from softevo.api.replay import replay_response
 from softevo.api.routes.meta import idle_workers
 from softevo.api.schemas import (
     Curve,
@@ -230,15 +230,12 @@ def get_replay(
     run_id: RunId,
     db: DatabaseDep,
     fps: Annotated[float, Query(ge=0.1, le=120)] = 30.0,
-) -> dict[str, Any]:
+) -> Response:
     """Frames of mass positions (and the springs) of the best robot, for a 3D viewer."""
     robot, best = _best_robot(db, run_id)
-    return {
-        "run_id": run_id,
-        "fitness": best["fitness"],
-        "generation": best["generation"],
-        **replay(robot, fps),
-    }
+    return replay_response(
+        robot, fps, run_id=run_id, fitness=best["fitness"], generation=best["generation"]
+    )
 
 
 _EVENT_ID = re.compile(r"-?[0-9]{1,10}")

@@ -9,13 +9,13 @@ from __future__ import annotations
 
 import io
 import threading
-from typing import Annotated, Any, Literal
+from typing import Annotated, Literal
 
 from fastapi import APIRouter, Path, Query, Response
 
 from softevo.api import store
 from softevo.api.deps import DatabaseDep
-from softevo.api.replay import replay
+from softevo.api.replay import replay_response
 from softevo.api.routes.runs import NOT_FOUND, RunId
 from softevo.core.config import RunConfig
 from softevo.core.genome import Genome
@@ -34,19 +34,16 @@ def get_individual_replay(
     number: Annotated[int, Path(ge=0, le=2**31 - 1, description="generation * P + index")],
     db: DatabaseDep,
     fps: Fps = 30.0,
-) -> dict[str, Any]:
+) -> Response:
     """Frames of mass positions (and the springs) of individual `number`, for a 3D viewer."""
     run = store.get_run(db, run_id)
     data = store.get_individual(db, run, number)
     config = RunConfig.model_validate(run.config)
     robot = config.make_encoding().to_robot(Genome.from_json(data["genome"]), config.sim)
-    return {
-        "run_id": run_id,
-        "number": number,
-        "generation": data["generation"],
-        "fitness": data["fitness"],
-        **replay(robot, fps),
-    }
+    return replay_response(
+        robot, fps, run_id=run_id, number=number, generation=data["generation"],
+        fitness=data["fitness"],
+    )  # fmt: skip
 
 
 @router.get(
