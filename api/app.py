@@ -111,6 +111,7 @@ def create_app(
             if replayer is not None:
                 replay.use_workers(None)
                 replayer.close()
+            replay.shutdown()  # the replays' own processes, if this server made any
             db.dispose()
 
     app = FastAPI(

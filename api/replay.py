@@ -1,5 +1,6 @@
 """Replays served by the API: computed once per (robot, fps) and remembered, on the RQ workers
-when the service has them (the API process then never loads the physics), else in this process.
+when the service has them (the API process then never loads the physics), else in two niced
+processes of the API's own, which hand back JSON bytes (the API only splices them).
 
 A replay is asked for on a plain GET, so it is bounded: at most `MAX_POSITIONS` mass positions
 (`softevo.core.replay`), its fps rounded to a bucket, at most `RUNNING_AT_ONCE` simulated at
@@ -10,14 +11,14 @@ simulates a robot once.
 
 from __future__ import annotations
 
-import contextlib
 import json
 import math
-import os
+import multiprocessing
 import threading
 from collections import OrderedDict
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
 from fastapi import Response
@@ -40,13 +41,10 @@ FPS_BUCKETS = (0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 15.0, 20.0, 30.0, 60.0, 120.0
 #: (robot file, fps, max positions) -> replay; None: in this process (`use_workers` sets it)
 Remote = Callable[[dict[str, Any], float, int], dict[str, Any]]
 _remote: Remote | None = None
-_cache: OrderedDict[tuple[str, float], dict[str, Any]] = OrderedDict()
-_sizes: dict[tuple[str, float], int] = {}
+_cache: OrderedDict[tuple[str, float], bytes] = OrderedDict()
 _lock = threading.Lock()
 _computing: dict[tuple[str, float], threading.Lock] = {}
 _slots = threading.BoundedSemaphore(RUNNING_AT_ONCE)
-#: a cached replay's JSON, made on first use (with the replay it encodes)
-_encoded: dict[tuple[str, float], tuple[dict[str, Any], bytes]] = {}
 
 
 class ReplayUnavailableError(RuntimeError):
@@ -67,8 +65,8 @@ def fps_bucket(fps: float) -> float:
     return min(FPS_BUCKETS, key=lambda bucket: abs(math.log(bucket / fps)))
 
 
-def replay(robot: Any, fps: float) -> dict[str, Any]:
-    """Frames at (up to) `fps` per simulated second, rounded to a bucket."""
+def replay(robot: Any, fps: float) -> bytes:
+    """Frames at (up to) `fps` per simulated second, rounded to a bucket, as JSON bytes."""
     key = _key(robot, fps)
     fps = key[1]
     with _lock:
@@ -99,20 +97,9 @@ def replay(robot: Any, fps: float) -> dict[str, Any]:
 
 
 def replay_response(robot: Any, fps: float, **head: Any) -> Response:
-    """The replay as a JSON response, `head` (run id, fitness, ...) first. The replay's JSON is
-    made once per replay and kept, in this request's thread: a replay is megabytes of numbers,
-    and encoding it on the server's event loop would stall every other request for seconds."""
-    data = replay(robot, fps)
-    key = _key(robot, fps)
-    with _lock:
-        kept = _encoded.get(key)
-    if kept is not None and kept[0] is data:
-        encoded = kept[1]
-    else:
-        encoded = json.dumps(data, separators=(",", ":"), allow_nan=False).encode()
-        with _lock:
-            if _cache.get(key) is data:  # kept as long as the replay is
-                _encoded[key] = (data, encoded)
+    """The replay as a JSON response, `head` (run id, fitness, ...) first: bytes spliced, never
+    a million positions turned into objects in this process (that would stall its event loop)."""
+    encoded = replay(robot, fps)
     prefix = json.dumps(head, separators=(",", ":"), allow_nan=False)[:-1].encode()
     body = encoded if not head else prefix + b"," + encoded[1:]
     return Response(content=body, media_type="application/json")
@@ -122,40 +109,56 @@ def _key(robot: Any, fps: float) -> tuple[str, float]:
     return json.dumps(robot_to_json(robot), sort_keys=True), fps_bucket(fps)
 
 
-def _remember(key: tuple[str, float], data: dict[str, Any]) -> None:
+def _remember(key: tuple[str, float], data: bytes) -> None:
     """Cached before its lock goes, so a late caller finds it; the oldest go past the bounds."""
-    frames = data.get("frames") or [[]]
-    # Python lists of floats: about 110 bytes a position (three floats and their list)
-    size = 110 * len(frames) * len(frames[0]) + 100 * len(data.get("springs") or [])
     with _lock:
-        _cache[key], _sizes[key] = data, size
+        _cache[key] = data
         while len(_cache) > 1 and (
-            len(_cache) > CACHED or sum(_sizes[k] for k in _cache) > CACHED_BYTES
+            len(_cache) > CACHED or sum(len(v) for v in _cache.values()) > CACHED_BYTES
         ):
-            old, _ = _cache.popitem(last=False)
-            _sizes.pop(old, None)
-            _encoded.pop(old, None)
+            _cache.popitem(last=False)
         _computing.pop(key, None)
 
 
-def _simulate(robot: Any, fps: float) -> dict[str, Any]:
+def _simulate(robot: Any, fps: float) -> bytes:
     if _remote is not None:
         try:
-            return _remote(robot_to_json(robot), fps, MAX_POSITIONS)
+            data = _remote(robot_to_json(robot), fps, MAX_POSITIONS)
         except RuntimeError as error:
             raise ReplayUnavailableError(str(error)) from None
-    from softevo.core.replay import replay_frames
+        return json.dumps(data, separators=(",", ":"), allow_nan=False).encode()
+    from softevo.core.replay import replay_json
 
-    # on a thread of lower priority: a replay uses a core for seconds, the API must not wait
-    return _simulators.submit(replay_frames, robot, fps, MAX_POSITIONS).result()
-
-
-def _lower_priority() -> None:
-    """Linux schedules threads on their own: this one yields to the API's (nice 10)."""
-    with contextlib.suppress(AttributeError, OSError):
-        os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), 10)
+    try:  # in a process of its own: its CPU and its encoding leave this one free
+        return _processes().submit(replay_json, robot_to_json(robot), fps, MAX_POSITIONS).result()
+    except BrokenProcessPool:
+        shutdown()
+        raise ReplayUnavailableError("the replay's process died (out of memory?)") from None
 
 
-_simulators = ThreadPoolExecutor(
-    RUNNING_AT_ONCE, thread_name_prefix="replay", initializer=_lower_priority
-)
+_pool: ProcessPoolExecutor | None = None
+
+
+def _processes() -> ProcessPoolExecutor:
+    """The replays' own processes (RUNNING_AT_ONCE, niced, gone with this one), made on the
+    first replay this process computes."""
+    global _pool
+    from softevo.core.evaluation import start_pool_process
+
+    with _lock:
+        if _pool is None:
+            _pool = ProcessPoolExecutor(
+                RUNNING_AT_ONCE,
+                mp_context=multiprocessing.get_context("spawn"),
+                initializer=start_pool_process,
+            )
+        return _pool
+
+
+def shutdown() -> None:
+    """Stop the replays' processes (the server stops, or one of them died)."""
+    global _pool
+    with _lock:
+        pool, _pool = _pool, None
+    if pool is not None:
+        pool.shutdown(wait=False, cancel_futures=True)

@@ -84,7 +84,7 @@ def warm_up() -> None:
 POOL_NICENESS = 10
 
 
-def _pool_process() -> None:
+def start_pool_process() -> None:
     """A pool process's start: it exits when its parent dies, however it dies (a SIGKILLed
     server leaves no simulations running under init), yields the CPU to its parent, then loads
     the kernels."""
@@ -117,7 +117,7 @@ class PoolEvaluator(Evaluator):
         return ProcessPoolExecutor(
             max_workers=self.processes,
             mp_context=multiprocessing.get_context("spawn"),
-            initializer=_pool_process,
+            initializer=start_pool_process,
         )
 
     def evaluate_batch(

@@ -24,6 +24,17 @@ def record_every(robot: Robot, masses: int, fps: float, max_positions: int) -> i
     return max(wanted, math.ceil(sim.n_steps / frames_allowed))
 
 
+def replay_json(robot_file: dict[str, Any], fps: float, max_positions: int) -> bytes:
+    """`replay_frames` of a robot file, as JSON bytes: what a separate process returns, so the
+    process that serves it never turns a million positions into objects."""
+    import json
+
+    from softevo.core.robot_file import parse_robot
+
+    data = replay_frames(parse_robot(robot_file), fps, max_positions)
+    return json.dumps(data, separators=(",", ":"), allow_nan=False).encode()
+
+
 def replay_frames(
     robot: Robot, fps: float, max_positions: int = MAX_REPLAY_POSITIONS
 ) -> dict[str, Any]:
