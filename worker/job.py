@@ -7,7 +7,6 @@ read at all is moved aside (`softevo:malformed:<id>`), logged, and skipped."""
 from __future__ import annotations
 
 import contextlib
-import json
 import logging
 from typing import Any, ClassVar
 
@@ -15,7 +14,7 @@ from redis.exceptions import RedisError
 from rq.exceptions import NoSuchJobError
 from rq.job import Job
 
-from softevo.worker.queue import JOB_FUNCTIONS, RESULT_TTL, engine_fingerprint, result_key
+from softevo.worker.queue import JOB_FUNCTIONS, engine_fingerprint, push_result
 
 log = logging.getLogger("softevo.worker")
 ENGINE = engine_fingerprint()
@@ -76,10 +75,7 @@ class SoftevoJob(Job):
         if key is not None:
             payload = {"refused": message, "worker": self.worker_name or "", "job": self.id}
             with contextlib.suppress(RedisError):
-                pipe = self.connection.pipeline()
-                pipe.rpush(result_key(key), json.dumps(payload))
-                pipe.expire(result_key(key), RESULT_TTL)
-                pipe.execute()
+                push_result(self.connection, key, payload)
         raise RefusedJobError(f"refused: {message}")
 
     # callbacks are never imported or run (a job that names one is refused above)

@@ -9,7 +9,6 @@ by one, so one bad robot fails alone.
 
 from __future__ import annotations
 
-import json
 import os
 import socket
 import time
@@ -17,7 +16,7 @@ from typing import Any
 
 from rq import get_current_job
 
-from softevo.worker.queue import RESULT_TTL, result_key
+from softevo.worker import queue
 
 
 def evaluate_batch(batch_key: str, robot_files: list[dict[str, Any]]) -> dict[str, Any]:
@@ -60,8 +59,5 @@ def push_result(batch_key: str, payload: dict[str, Any]) -> dict[str, Any]:
     job = get_current_job()
     if job is not None:
         payload["job"] = job.id
-        pipe = job.connection.pipeline()
-        pipe.rpush(result_key(batch_key), json.dumps(payload))
-        pipe.expire(result_key(batch_key), RESULT_TTL)
-        pipe.execute()
+        queue.push_result(job.connection, batch_key, payload)
     return payload

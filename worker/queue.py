@@ -4,6 +4,7 @@ pickles, so nothing read from Redis can run code in the API process."""
 
 from __future__ import annotations
 
+import json
 from urllib.parse import urlsplit, urlunsplit
 
 from redis import Redis
@@ -38,6 +39,14 @@ def engine_fingerprint() -> str:
 def result_key(batch_key: str) -> str:
     """The Redis list a batch's results are pushed onto, by whichever attempt finishes first."""
     return f"softevo:result:{batch_key}"
+
+
+def push_result(connection: Redis, batch_key: str, payload: dict) -> None:
+    """Push `payload` (JSON) onto the batch's result list, which expires with RESULT_TTL."""
+    pipe = connection.pipeline()
+    pipe.rpush(result_key(batch_key), json.dumps(payload))
+    pipe.expire(result_key(batch_key), RESULT_TTL)
+    pipe.execute()
 
 
 def redacted(url: str) -> str:

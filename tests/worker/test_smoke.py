@@ -112,22 +112,25 @@ def test_the_first_job_pays_no_compilation(redis_server, workers, tmp_path, monk
     assert first.seconds < 2 * second.seconds + 0.05
 
 
-def test_a_replay_with_no_live_worker_is_a_503_not_a_hang(redis_server, tmp_path) -> None:
-    """On Redis with no worker, a replay GET waits `replay_seconds`, then says why (503)."""
-    import time
-
+def api_on_redis(redis_url: str, tmp_path, **settings: float):  # type: ignore[no-untyped-def]
+    """A started app on a SQLite file and this Redis (no worker unless the test starts one)."""
     from fastapi.testclient import TestClient
 
     from softevo.api.app import create_app
     from softevo.api.settings import Settings
 
-    settings = Settings(
-        database_url=f"sqlite:///{tmp_path / 'api.db'}",
-        redis_url=redis_server.url,
-        poll_seconds=0.05,
-        replay_seconds=1.0,
-    )
-    with TestClient(create_app(settings)) as client:
+    database = f"sqlite:///{tmp_path / 'api.db'}"
+    return TestClient(
+        create_app(Settings(database_url=database, redis_url=redis_url, poll_seconds=0.05,
+                            **settings))  # type: ignore[arg-type]
+    )  # fmt: skip
+
+
+def test_a_replay_with_no_live_worker_is_a_503_not_a_hang(redis_server, tmp_path) -> None:
+    """On Redis with no worker, a replay GET waits `replay_seconds`, then says why (503)."""
+    import time
+
+    with api_on_redis(redis_server.url, tmp_path, replay_seconds=1.0) as client:
         run = client.post("/runs", json={"preset": "quick", "population": 4}).json()["id"]
         deadline = time.monotonic() + 30
         while client.get(f"/runs/{run}/individuals").json()["total"] == 0:
@@ -147,18 +150,7 @@ def test_a_queue_without_a_live_worker_is_said(redis_server, workers, tmp_path) 
     started then clears it."""
     import time
 
-    from fastapi.testclient import TestClient
-
-    from softevo.api.app import create_app
-    from softevo.api.settings import Settings
-
-    settings = Settings(
-        database_url=f"sqlite:///{tmp_path / 'api.db'}",
-        redis_url=redis_server.url,
-        poll_seconds=0.05,
-        no_worker_seconds=1.0,
-    )
-    with TestClient(create_app(settings)) as client:
+    with api_on_redis(redis_server.url, tmp_path, no_worker_seconds=1.0) as client:
         run = client.post("/runs", json={"preset": "quick", "population": 4, "generations": 2})
         run_id = run.json()["id"]
         deadline = time.monotonic() + 30
