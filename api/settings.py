@@ -50,6 +50,8 @@ class Settings:
     no_worker_seconds: float = 60.0  # with Redis: a queue without a live worker this long is said
     lease_seconds: float = 15.0  # a coordinator that stops heartbeating loses its runs after this
     poll_seconds: float = 0.5  # how often the scheduler looks for queued or orphaned runs
+    header_seconds: float = 10.0  # a request's head (line and headers) must arrive within this
+    keep_alive_seconds: float = 5.0  # an idle keep-alive connection is closed after this
     limits: Limits = field(default_factory=Limits)
 
     @classmethod
@@ -80,6 +82,8 @@ class Settings:
             raise ValueError("SOFTEVO_WORKERS: must be >= 1")
         if settings.lease_seconds <= 0 or settings.poll_seconds <= 0:
             raise ValueError("SOFTEVO_LEASE_SECONDS and SOFTEVO_POLL_SECONDS must be > 0")
+        if settings.header_seconds <= 0 or settings.keep_alive_seconds <= 0:
+            raise ValueError("SOFTEVO_HEADER_SECONDS and SOFTEVO_KEEP_ALIVE_SECONDS must be > 0")
         return settings
 
 

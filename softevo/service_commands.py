@@ -98,6 +98,7 @@ def serve_command(args: argparse.Namespace) -> int:
     import uvicorn
 
     from softevo.api.app import create_app
+    from softevo.api.server import uvicorn_options
 
     if not 0 < args.port < 65536:
         args.parser.error(f"--port must be between 1 and 65535, got {args.port}")
@@ -105,7 +106,13 @@ def serve_command(args: argparse.Namespace) -> int:
     if args.migrate:
         upgrade_command(argparse.Namespace(url=settings.database_url, parser=args.parser))
     logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
-    uvicorn.run(create_app(settings), host=args.host, port=args.port, log_level=args.log_level)
+    uvicorn.run(
+        create_app(settings),
+        host=args.host,
+        port=args.port,
+        log_level=args.log_level,
+        **uvicorn_options(settings),
+    )
     return 0
 
 
