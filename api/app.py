@@ -92,6 +92,7 @@ def create_app(
             max_running=settings.max_running,
             batch_size=settings.batch_size,
             in_flight=settings.queued_batches,
+            save_seconds=settings.save_seconds,
             lease_seconds=settings.lease_seconds,
             poll_seconds=settings.poll_seconds,
         )

@@ -1,13 +1,15 @@
 """The coordinator: drives runs generation by generation inside the API process.
 
 For each run it owns (see `store.leases`) it runs the one generation step of
-`softevo.core.generation` with persistence around it (`DriverHooks`): the generation's individuals
-are kept before anything is evaluated, each batch's fitness is saved as it lands, and the
-generation (its statistics, the GA state, the run's counters) is committed in one transaction. The
-GA state stored with the last committed generation is all a successor needs: generation g is bred
-from (seed, g) and generation g-1 alone, so a run taken over after a crash regenerates the same
-individuals, re-evaluates only those without fitness and ends with the same learning curve as an
-undisturbed run.
+`softevo.core.generation` with persistence around it (`RunDriver`): the generation's individuals
+are kept before anything is evaluated, batches' fitness is saved as it lands (a batch that lands
+within `save_seconds` of the run's last write waits for the next one, so a generation of quick
+batches costs one transaction, not one per batch), and the generation (its remaining fitness,
+statistics, the GA state, the run's counters, and the next generation's members, bred at once)
+is committed in one transaction. The GA state stored with the last committed generation is all a
+successor needs: generation g is bred from (seed, g) and generation g-1 alone, so a run taken over
+after a crash regenerates the same individuals, re-evaluates only those without fitness and ends
+with the same learning curve as an undisturbed run.
 """
 
 from __future__ import annotations
@@ -18,19 +20,20 @@ import socket
 import threading
 import time
 import uuid
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import Any
 
 from sqlalchemy.exc import InterfaceError, InternalError, OperationalError
 
 from softevo.api import store
 from softevo.api.db import Database
 from softevo.api.faults import Faults
-from softevo.api.store.driving import Lease, LeaseLostError
+from softevo.api.store.driving import GenerationCommit, Landed, Lease, LeaseLostError
 from softevo.core.config import RunConfig
 from softevo.core.evaluator import BatchResult, Evaluator
 from softevo.core.ga.algorithm import GAState, GeneticAlgorithm, Individual
 from softevo.core.generation import Engine, Hooks, Step
-from softevo.core.limits import BATCH_SIZE, IN_FLIGHT
+from softevo.core.limits import BATCH_SIZE, IN_FLIGHT, SAVE_SECONDS
 
 log = logging.getLogger("softevo.coordinator")
 
@@ -48,6 +51,7 @@ class Driving:
     lease: Lease
     batch_size: int
     in_flight: int
+    save_seconds: float  # fitness landing within this of the run's last write waits for the next
     stopping: threading.Event
     faults: Faults
 
@@ -61,6 +65,10 @@ class RunDriver(Hooks):
         self.run_id = run_id
         self.abort = threading.Event()
         self.reason = ""
+        self.landed: list[Landed] = []  # batches' fitness not written yet
+        self.kept: int | None = None  # the generation this driver's last commit kept
+        self.written = time.monotonic()  # when this driver last wrote
+        self.generation: int | None = None  # the generation being evaluated
 
     # -- control -------------------------------------------------------------------------------
 
@@ -77,22 +85,27 @@ class RunDriver(Hooks):
     # -- the hooks of the generation step -------------------------------------------------------
 
     def individuals(self, generation: int, individuals: list[Individual]) -> dict[int, float]:
-        members = [
-            {"genome": item.genome.to_json(), "genome_hash": item.genome.hash,
-             "operator": item.operator, "parents": list(item.parents)}
-            for item in individuals
-        ]  # fmt: skip
+        if generation == self.kept:  # kept by this driver's last commit, nothing evaluated since
+            return {}
+        self.written = time.monotonic()
         return self._fenced(
             store.driving.keep_generation, self.db, self.run_id, self.driving.lease, generation,
-            members,
+            members(individuals),
         )  # fmt: skip
 
     def batch(self, generation: int, indices: list[int], result: BatchResult) -> None:
         fitness = dict(zip(indices, result.fitness.tolist(), strict=True))
-        seconds = result.seconds / max(1, len(indices))
+        self.landed.append(Landed(fitness, result.worker, result.seconds / max(1, len(indices))))
+        if time.monotonic() - self.written >= self.driving.save_seconds:
+            self._save(generation)
+
+    def _save(self, generation: int) -> None:
+        """Write the fitness that landed and waits (one statement for all its batches)."""
+        landed, self.landed = self.landed, []
+        self.written = time.monotonic()
         self._fenced(
             store.driving.save_fitness, self.db, self.run_id, self.driving.lease, generation,
-            fitness, result.worker, seconds,
+            landed,
         )  # fmt: skip
 
     def _fenced(self, write, *args):  # type: ignore[no-untyped-def]
@@ -109,6 +122,7 @@ class RunDriver(Hooks):
             self._drive()
         except Stop as stop:
             log.info("run %s: driver stopped (%s)", self.run_id, stop)
+            self._save_on_stop()
         except (OperationalError, InterfaceError, InternalError) as error:  # the database: said
             self.driving.faults.record(error, f"run {self.run_id}")
         except Exception as error:  # any bug or evaluator failure fails the run
@@ -123,6 +137,18 @@ class RunDriver(Hooks):
             except Exception:  # the database itself is away; the lease will expire
                 log.exception("run %s: could not record the failure", self.run_id)
 
+    def _save_on_stop(self) -> None:
+        """Stopped mid-generation (shutdown, cancel, lost lease): keep what landed if the lease
+        still allows it, so a successor need not evaluate it again."""
+        if not self.landed or self.generation is None:
+            return
+        try:
+            self._save(self.generation)
+        except Stop:  # the lease is gone (cancelled, taken over): the write was refused
+            pass
+        except (OperationalError, InterfaceError, InternalError) as error:
+            self.driving.faults.record(error, f"run {self.run_id}")
+
     def _drive(self) -> None:
         stored_config, stored_state = store.driving.load(self.db, self.run_id)
         config = RunConfig.model_validate(stored_config)
@@ -132,25 +158,47 @@ class RunDriver(Hooks):
         cache = store.driving.known_fitness(self.db, self.run_id, state.generation)
         while not algorithm.done(state):
             self.check()
+            self.generation = state.generation
             step = engine.step(state, cache, self.driving.evaluator, self, f"run{self.run_id}")
-            self._commit(step, algorithm.done(step.state))
             state = step.state
+            upcoming: list[Individual] = []
+            if not algorithm.done(state):  # bred now, kept by the same commit
+                upcoming = algorithm.ask(state)
+                state = replace(state, current=upcoming)
+            self._commit(step, upcoming)
 
-    def _commit(self, step: Step, done: bool) -> None:
-        """The generation's statistics, cached fitness, GA state and counters, all or nothing."""
-        stored = step.state.to_json(history=False)  # the curve lives in `generations`
-        cached = {
-            index: value
-            for index, value in enumerate(step.fitness.tolist())
-            if index not in step.evaluated
-        }
+    def _commit(self, step: Step, upcoming: list[Individual]) -> None:
+        """The generation's fitness, statistics, GA state and counters and the next generation's
+        members, all or nothing."""
         best = step.state.best
-        self._fenced(
-            store.driving.commit_generation, self.db, self.run_id, self.driving.lease,
-            step.stats.to_json(), cached, stored, None if best is None else (best[1], best[2]),
-            done, step.seconds,
-        )  # fmt: skip
+        commit = GenerationCommit(
+            stats=step.stats.to_json(),
+            state=step.state.to_json(history=False),  # the curve lives in `generations`
+            cached={
+                index: value
+                for index, value in enumerate(step.fitness.tolist())
+                if index not in step.evaluated
+            },
+            landed=self.landed,
+            best=None if best is None else (best[1], best[2]),
+            done=not upcoming,
+            seconds=step.seconds,
+            upcoming=members(upcoming),
+        )
+        self.landed, self.written = [], time.monotonic()
+        self._fenced(store.driving.commit_generation, self.db, self.run_id, self.driving.lease,
+                     commit)  # fmt: skip
+        self.kept = step.stats.generation + 1 if upcoming else None
         self.driving.faults.clear()  # a generation committed: the database takes writes
+
+
+def members(individuals: list[Individual]) -> list[dict[str, Any]]:
+    """Individuals as the store keeps them."""
+    return [
+        {"genome": item.genome.to_json(), "genome_hash": item.genome.hash,
+         "operator": item.operator, "parents": list(item.parents)}
+        for item in individuals
+    ]  # fmt: skip
 
 
 class Coordinator:
@@ -164,6 +212,7 @@ class Coordinator:
         max_running: int = 2,
         batch_size: int = BATCH_SIZE,
         in_flight: int = IN_FLIGHT,
+        save_seconds: float = SAVE_SECONDS,
         lease_seconds: float = 15.0,
         poll_seconds: float = 0.5,
     ) -> None:
@@ -177,7 +226,7 @@ class Coordinator:
         lease = Lease(self.owner, lease_seconds)
         self.faults = Faults()
         self.driving = Driving(
-            db, evaluator, lease, batch_size, in_flight, self.stopping, self.faults
+            db, evaluator, lease, batch_size, in_flight, save_seconds, self.stopping, self.faults
         )
         self._wake = threading.Event()
         self._drivers: dict[int, tuple[RunDriver, threading.Thread]] = {}

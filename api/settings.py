@@ -11,7 +11,13 @@ import os
 from dataclasses import dataclass, field, fields
 from functools import lru_cache
 
-from softevo.core.limits import BATCH_SIZE, IN_FLIGHT, MAX_VOXELS, SERVICE_MAX_VOXELS
+from softevo.core.limits import (
+    BATCH_SIZE,
+    IN_FLIGHT,
+    MAX_VOXELS,
+    SAVE_SECONDS,
+    SERVICE_MAX_VOXELS,
+)
 
 DEFAULT_DATABASE_URL = "sqlite:///softevo.db"
 
@@ -44,8 +50,9 @@ class Settings:
     api_token: str | None = None
     max_running: int = 2  # runs driven at once by this process; the rest wait, queued
     workers: int | None = None  # in-process pool size (default: one per core)
-    batch_size: int = BATCH_SIZE  # robots per evaluator call; fitness is saved batch by batch
+    batch_size: int = BATCH_SIZE  # robots per evaluator call
     queued_batches: int = IN_FLIGHT  # batches of one run in flight at once
+    save_seconds: float = SAVE_SECONDS  # a batch landing sooner after the run's last write waits
     replay_seconds: float = 600.0  # with Redis: a replay GET waits at most this for a worker
     no_worker_seconds: float = 60.0  # with Redis: a queue without a live worker this long is said
     lease_seconds: float = 15.0  # a coordinator that stops heartbeating loses its runs after this
@@ -82,6 +89,8 @@ class Settings:
             raise ValueError("SOFTEVO_WORKERS: must be >= 1")
         if settings.lease_seconds <= 0 or settings.poll_seconds <= 0:
             raise ValueError("SOFTEVO_LEASE_SECONDS and SOFTEVO_POLL_SECONDS must be > 0")
+        if settings.save_seconds < 0:
+            raise ValueError("SOFTEVO_SAVE_SECONDS: must be >= 0 (0: every batch at once)")
         if settings.header_seconds <= 0 or settings.keep_alive_seconds <= 0:
             raise ValueError("SOFTEVO_HEADER_SECONDS and SOFTEVO_KEEP_ALIVE_SECONDS must be > 0")
         return settings

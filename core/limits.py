@@ -11,10 +11,15 @@ MAX_VOXELS = 4096
 MAX_FILE_BYTES = 8 * 1024 * 1024
 #: The service's default ceiling on one run's voxels (SOFTEVO_MAX_VOXELS; at most MAX_VOXELS).
 SERVICE_MAX_VOXELS = 512
-#: Robots per evaluator call in the service by default (SOFTEVO_BATCH_SIZE): fitness is saved
-#: batch by batch, and the local pool cuts no chunk smaller than this.
+#: Robots per evaluator call in the service by default (SOFTEVO_BATCH_SIZE); the local pool cuts
+#: no chunk smaller than this.
 BATCH_SIZE = 4
 #: Batches of one run in flight at once by default (SOFTEVO_QUEUED_BATCHES in the service).
 IN_FLIGHT = 64
+#: The service saves a batch's fitness as it lands unless the run was written less than this
+#: long ago (s; SOFTEVO_SAVE_SECONDS): then it waits for the next write, at the latest the
+#: generation's commit. So quick generations cost one transaction, and a crash loses at most
+#: this much finished evaluation per run.
+SAVE_SECONDS = 1.0
 #: Most mass positions one replay carries (frames x masses), about 20 MB of JSON.
 MAX_REPLAY_POSITIONS = 1_000_000

@@ -1,16 +1,17 @@
 """The coordinator's reads and writes while it drives a run: the run to drive, the fitness its
-earlier generations already have, a generation's individuals (one multi-row insert), each batch's
-fitness (one statement per batch) and the generation's commit (statistics, cached fitness, GA
-state and counters, all or nothing). Every write is fenced by the lease in its own transaction
-(`leases.owns`), so a coordinator that lost the run can never write over its successor."""
+earlier generations already have, a generation's individuals (one multi-row insert), batches'
+fitness (one statement for any number of batches) and the generation's commit (its fitness,
+statistics, GA state and counters, and the next generation's members, all or nothing). Every
+write is fenced by the lease in its own transaction (`leases.owns`), so a coordinator that lost
+the run can never write over its successor."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
-from sqlalchemy import bindparam, insert, select, update
+from sqlalchemy import Connection, bindparam, insert, select, update
 from sqlalchemy.orm import Session
 
 from softevo.api.db import Database
@@ -84,14 +85,7 @@ def keep_generation(
             .where(columns.run_id == run_id, columns.generation == generation)
         ).all()  # fmt: skip
         if not rows:
-            connection.execute(
-                insert(INDIVIDUALS),
-                [
-                    {**member, "run_id": run_id, "generation": generation, "index": index,
-                     "status": IndividualStatus.PENDING.value}
-                    for index, member in enumerate(members)
-                ],
-            )  # fmt: skip
+            _insert_members(connection, run_id, generation, members)
             return {}
         stored = {row.index: row.genome_hash for row in rows}
         if stored != {index: member["genome_hash"] for index, member in enumerate(members)}:
@@ -121,69 +115,113 @@ _SET_FITNESS = (
 )
 
 
-def _fitness_rows(
-    run_id: int, generation: int, fitness: dict[int, float], status: IndividualStatus | None,
-    seconds: float | None, worker: str | None,
-) -> list[dict[str, Any]]:  # fmt: skip
+@dataclass(frozen=True)
+class Landed:
+    """One batch's fitness (by index in its generation; NaN = failed), the worker that
+    evaluated it and the seconds each of its robots took."""
+
+    fitness: dict[int, float]
+    worker: str
+    seconds_each: float
+
+
+@dataclass(frozen=True)
+class GenerationCommit:
+    """What one generation's commit writes, all or nothing: its statistics (`stats`:
+    GenerationStats.to_json()), the GA state after it (`state`), the fitness of members copied
+    from earlier generations (`cached`), batches' fitness not saved yet (`landed`), the run's
+    best (fitness, generation), the generation's wall time, and, unless the run is `done`, the
+    next generation's members (`upcoming`, as `keep_generation` takes them), so the next step
+    needs no transaction of its own to keep them."""
+
+    stats: dict[str, Any]
+    state: dict[str, Any]
+    cached: dict[int, float] = field(default_factory=dict)
+    landed: Sequence[Landed] = ()
+    best: tuple[float, int] | None = None
+    done: bool = False
+    seconds: float = 0.0
+    upcoming: Sequence[dict[str, Any]] = ()
+
+
+def _fitness_rows(run_id: int, generation: int, landed: Sequence[Landed]) -> list[dict[str, Any]]:
     at = now()
     return [
         {"b_run": run_id, "b_generation": generation, "b_index": index,
-         "b_fitness": to_null(value), "b_seconds": seconds, "b_worker": worker, "b_at": at,
-         "b_status": (status or (IndividualStatus.EVALUATED if to_null(value) is not None
-                                 else IndividualStatus.FAILED)).value}
-        for index, value in fitness.items()
+         "b_fitness": to_null(value), "b_seconds": batch.seconds_each,
+         "b_worker": batch.worker[:128], "b_at": at,
+         "b_status": (IndividualStatus.EVALUATED if to_null(value) is not None
+                      else IndividualStatus.FAILED).value}
+        for batch in landed
+        for index, value in batch.fitness.items()
+    ]  # fmt: skip
+
+
+def _cached_rows(run_id: int, generation: int, cached: dict[int, float]) -> list[dict[str, Any]]:
+    at = now()
+    return [
+        {"b_run": run_id, "b_generation": generation, "b_index": index,
+         "b_fitness": to_null(value), "b_seconds": None, "b_worker": None, "b_at": at,
+         "b_status": IndividualStatus.CACHED.value}
+        for index, value in cached.items()
     ]  # fmt: skip
 
 
 def save_fitness(
-    db: Database, run_id: int, lease: Lease, generation: int, fitness: dict[int, float],
-    worker: str, seconds_each: float,
-) -> None:  # fmt: skip
-    """One batch's fitness (by index; NaN = failed), written once per individual."""
+    db: Database, run_id: int, lease: Lease, generation: int, landed: Sequence[Landed]
+) -> None:
+    """Batches' fitness, written once per individual, in one transaction."""
     with db.write() as session:
         _fence(session, run_id, lease)
-        rows = _fitness_rows(run_id, generation, fitness, None, seconds_each, worker[:128])
+        rows = _fitness_rows(run_id, generation, landed)
         if rows:
             session.connection().execute(_SET_FITNESS, rows)
 
 
-def commit_generation(
-    db: Database,
-    run_id: int,
-    lease: Lease,
-    stats: dict[str, Any],
-    cached: dict[int, float],
-    state: dict[str, Any],
-    best: tuple[float, int] | None,
-    done: bool,
-    seconds: float,
+def _insert_members(
+    connection: Connection, run_id: int, generation: int, members: Sequence[dict[str, Any]]
 ) -> None:
-    """The generation's statistics (`stats`: GenerationStats.to_json()), the fitness of members
-    copied from earlier generations, the GA state and the run's counters, all or nothing."""
+    connection.execute(
+        insert(INDIVIDUALS),
+        [
+            {**member, "run_id": run_id, "generation": generation, "index": index,
+             "status": IndividualStatus.PENDING.value}
+            for index, member in enumerate(members)
+        ],
+    )  # fmt: skip
+
+
+def commit_generation(db: Database, run_id: int, lease: Lease, commit: GenerationCommit) -> None:
+    """The generation's fitness, statistics, GA state and counters, and the next generation's
+    members, all or nothing."""
+    stats = commit.stats
     generation = stats["generation"]
     with db.write() as session:
         _fence(session, run_id, lease)
-        rows = _fitness_rows(run_id, generation, cached, IndividualStatus.CACHED, None, None)
-        if rows:
-            session.connection().execute(_SET_FITNESS, rows)
         connection = session.connection()
+        rows = _fitness_rows(run_id, generation, commit.landed)
+        rows += _cached_rows(run_id, generation, commit.cached)
+        if rows:
+            connection.execute(_SET_FITNESS, rows)
         connection.execute(
             insert(GENERATIONS),
-            {"run_id": run_id, **{key: stats[key] for key in CURVE_FIELDS}, "seconds": seconds,
-             "committed_at": now()},
+            {"run_id": run_id, **{key: stats[key] for key in CURVE_FIELDS},
+             "seconds": commit.seconds, "committed_at": now()},
         )  # fmt: skip
         values: dict[str, Any] = {
-            "ga_state": state,
+            "ga_state": commit.state,
             "generations_done": generation + 1,
             "evaluations": RUNS.c.evaluations + stats["evaluations"],
             "saved": RUNS.c.saved + stats["saved"],
-            "compute_seconds": RUNS.c.compute_seconds + seconds,
+            "compute_seconds": RUNS.c.compute_seconds + commit.seconds,
         }
-        if best is not None:
-            values.update(best_fitness=best[0], best_generation=best[1])
-        if done:
+        if commit.best is not None:
+            values.update(best_fitness=commit.best[0], best_generation=commit.best[1])
+        if commit.done:
             values.update(status=RunStatus.COMPLETED.value, finished_at=now(), lease_owner=None,
                           lease_expires=None)  # fmt: skip
+        elif commit.upcoming:
+            _insert_members(connection, run_id, generation + 1, commit.upcoming)
         connection.execute(update(RUNS).where(RUNS.c.id == run_id).values(**values))
 
 

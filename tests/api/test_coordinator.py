@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from alembic.autogenerate import compare_metadata
 from alembic.migration import MigrationContext
-from sqlalchemy import func, select
+from sqlalchemy import event, func, select
 from sqlalchemy.exc import IntegrityError
 
 from softevo.api import store
@@ -161,3 +161,77 @@ def test_failed_robots_are_nan_ranked_last_not_zero(db: Database) -> None:
     items, _ = store.list_individuals(db, store.get_run(db, run.id), 0, 0, 100)
     failed = [item for item in items if item["status"] == "failed"]
     assert len(failed) == 4 and all(item["fitness"] is None for item in failed)
+
+
+class Counting(SerialEvaluator):
+    """Counts the robots and batches it evaluates."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.batches = self.robots = 0
+
+    def evaluate_batch(
+        self, robot_files: Sequence[dict[str, Any]], key: str | None = None
+    ) -> BatchResult:
+        self.batches += 1
+        self.robots += len(robot_files)
+        return super().evaluate_batch(robot_files, key)
+
+
+def count_writes(db: Database) -> list[int]:
+    """A one-item list that counts the write transactions begun on `db` from now on."""
+    writes = [0]
+
+    @event.listens_for(db.engine, "begin")
+    def _begin(connection: Any) -> None:
+        writes[0] += connection.get_execution_options().get("softevo_write", False)
+
+    return writes
+
+
+@pytest.mark.parametrize("save_seconds", [60.0, 0.0])
+def test_quick_batches_cost_one_write_per_generation(db: Database, save_seconds: float) -> None:
+    """Batches landing within `save_seconds` of the run's last write wait for the generation's
+    commit, which also keeps the next generation: one write transaction a generation. With 0,
+    each batch is saved as it lands. The curve is the same either way."""
+    run = store.create_run(db, resolve(REQUEST))
+    evaluator = Counting()
+    writes = count_writes(db)
+    options = {"batch_size": 2, "save_seconds": save_seconds, "lease_seconds": 120.0}
+    assert drive(db, run.id, evaluator, **options) == "completed"
+    generations = REQUEST["generations"]
+    # taking the run, keeping generation 0, one commit a generation, and the stop's release
+    expected = 1 + 1 + generations + 1 + (evaluator.batches if save_seconds == 0 else 0)
+    assert writes[0] == expected, (writes[0], evaluator.batches)
+    assert evaluator.batches > generations  # several batches a generation were coalesced
+    assert store.curve(db, run.id) == undisturbed_curve(REQUEST)
+
+
+def test_fitness_waiting_for_its_write_is_saved_at_a_shutdown(db: Database) -> None:
+    """Three batches of generation 0 land and wait (a minute's `save_seconds`), the fourth hangs;
+    a clean shutdown saves the three, and the successor evaluates only the rest."""
+    run = store.create_run(db, resolve(REQUEST))
+    frozen = FreezingEvaluator(calls=3)
+    first = Coordinator(db, frozen, batch_size=2, save_seconds=60.0, poll_seconds=0.05)
+    first.start()
+    deadline = time.monotonic() + 60
+    while frozen.calls >= 0:
+        assert time.monotonic() < deadline
+        time.sleep(0.02)
+    first.stop()
+    frozen.release.set()
+    with db.read() as session:
+        saved = session.scalar(
+            select(func.count()).where(
+                Individual.run_id == run.id, Individual.generation == 0,
+                Individual.status.in_(("evaluated", "failed")),
+            )
+        )  # fmt: skip
+    assert saved == 6
+    successor = Counting()
+    assert drive(db, run.id, successor, batch_size=2) == "completed"
+    record = store.get_run(db, run.id)
+    evolution = Evolution.start(resolve(REQUEST))
+    evolution.run(SerialEvaluator())
+    assert store.curve(db, run.id) == evolution.curve()
+    assert successor.robots == record.evaluations - 6

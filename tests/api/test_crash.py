@@ -75,6 +75,7 @@ def serve(database_url: str, log: Path) -> Server:
         "SOFTEVO_POLL_SECONDS": "0.2",
         "SOFTEVO_WORKERS": "1",
         "SOFTEVO_BATCH_SIZE": "2",
+        "SOFTEVO_SAVE_SECONDS": "0",  # every batch saved as it lands: a generation half saved
     }
     try:
         return Server(start_service(env, log))

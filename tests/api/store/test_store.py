@@ -14,7 +14,13 @@ from sqlalchemy.exc import IntegrityError
 from softevo.api import store
 from softevo.api.db import Database
 from softevo.api.models import Generation, Individual
-from softevo.api.store.driving import GenerationMismatchError, Lease, LeaseLostError
+from softevo.api.store.driving import (
+    GenerationCommit,
+    GenerationMismatchError,
+    Landed,
+    Lease,
+    LeaseLostError,
+)
 from softevo.core.config import resolve
 from softevo.core.status import IndividualStatus, RunStatus
 
@@ -58,8 +64,9 @@ def test_a_generation_is_kept_once_and_a_different_one_refused(db: Database) -> 
 def test_a_fitness_is_written_once_and_nan_is_failed_not_zero(db: Database) -> None:
     run_id = driven(db)
     store.driving.keep_generation(db, run_id, OWNER, 0, members())
-    store.driving.save_fitness(db, run_id, OWNER, 0, {0: 0.5, 1: math.nan}, "w1", 0.1)
-    store.driving.save_fitness(db, run_id, OWNER, 0, {0: 9.0, 2: 0.25}, "w2", 0.1)  # late twin
+    store.driving.save_fitness(db, run_id, OWNER, 0, [Landed({0: 0.5, 1: math.nan}, "w1", 0.1)])
+    late_twin = Landed({0: 9.0}, "w2", 0.1)
+    store.driving.save_fitness(db, run_id, OWNER, 0, [late_twin, Landed({2: 0.25}, "w3", 0.2)])
     assert statuses(db, run_id) == {
         0: (IndividualStatus.EVALUATED, 0.5),
         1: (IndividualStatus.FAILED, None),
@@ -71,15 +78,18 @@ def test_a_fitness_is_written_once_and_nan_is_failed_not_zero(db: Database) -> N
     assert known[0] == 0.5 and math.isnan(known[1]) and set(known) == {0, 1, 2}
 
 
-def commit(db: Database, run_id: int, lease: Lease, done: bool) -> None:
-    stats = {
-        "generation": 0, "best": 0.5, "mean": 0.3, "median": 0.3, "min": 0.1, "std": 0.1,
-        "best_so_far": 0.5, "diversity": 0.4, "size": 4, "failed": 0, "evaluations": 3,
-        "saved": 1,
-    }  # fmt: skip
+STATS = {
+    "generation": 0, "best": 0.5, "mean": 0.3, "median": 0.3, "min": 0.1, "std": 0.1,
+    "best_so_far": 0.5, "diversity": 0.4, "size": 4, "failed": 0, "evaluations": 3, "saved": 1,
+}  # fmt: skip
+
+
+def commit(db: Database, run_id: int, lease: Lease, done: bool, **parts: object) -> None:
     store.driving.commit_generation(
-        db, run_id, lease, stats, {3: 0.1}, {"seed": 1}, (0.5, 0), done, 1.5
-    )
+        db, run_id, lease,
+        GenerationCommit(STATS, {"seed": 1}, cached={3: 0.1}, best=(0.5, 0), done=done,
+                         seconds=1.5, **parts),  # type: ignore[arg-type]
+    )  # fmt: skip
 
 
 def test_a_commit_writes_the_generation_counters_and_cached_fitness(db: Database) -> None:
@@ -91,6 +101,44 @@ def test_a_commit_writes_the_generation_counters_and_cached_fitness(db: Database
     assert (record.evaluations, record.saved, record.best_fitness) == (3, 1, 0.5)
     assert statuses(db, run_id)[3] == (IndividualStatus.CACHED, 0.1)
     assert [row["generation"] for row in store.curve(db, run_id)] == [0]
+
+
+def test_a_commit_writes_what_landed_and_keeps_the_next_generation(db: Database) -> None:
+    """Batches' fitness not saved yet lands with the commit, and the next generation's members
+    are kept by it: keeping them again (a successor) finds them, nothing evaluated."""
+    run_id = driven(db)
+    store.driving.keep_generation(db, run_id, OWNER, 0, members())
+    store.driving.save_fitness(db, run_id, OWNER, 0, [Landed({0: 0.5}, "w1", 0.1)])
+    landed = [Landed({1: math.nan}, "w1", 0.1), Landed({2: 0.25}, "w2", 0.3)]
+    commit(db, run_id, OWNER, done=False, landed=landed, upcoming=members("n"))
+    columns = (Individual.genome_hash, Individual.status, Individual.fitness, Individual.worker)
+    with db.read() as session:
+        rows = session.execute(
+            select(*columns).where(Individual.run_id == run_id)
+            .order_by(Individual.generation, Individual.index)
+        ).all()  # fmt: skip
+    assert [tuple(row) for row in rows[:4]] == [
+        ("x0", IndividualStatus.EVALUATED, 0.5, "w1"),
+        ("x1", IndividualStatus.FAILED, None, "w1"),
+        ("x2", IndividualStatus.EVALUATED, 0.25, "w2"),
+        ("x3", IndividualStatus.CACHED, 0.1, None),
+    ]
+    assert [tuple(row) for row in rows[4:]] == [
+        (f"n{i}", IndividualStatus.PENDING, None, None) for i in range(4)
+    ]
+    assert store.driving.keep_generation(db, run_id, OWNER, 1, members("n")) == {}
+    with pytest.raises(GenerationMismatchError):
+        store.driving.keep_generation(db, run_id, OWNER, 1, members("m"))
+    assert store.get_run(db, run_id).generations_done == 1
+
+
+def test_the_last_commit_keeps_no_next_generation(db: Database) -> None:
+    run_id = driven(db)
+    store.driving.keep_generation(db, run_id, OWNER, 0, members())
+    commit(db, run_id, OWNER, done=True, upcoming=members("n"))
+    assert store.get_run(db, run_id).status == RunStatus.COMPLETED
+    with db.read() as session:
+        assert session.scalar(select(func.max(Individual.generation))) == 0
 
 
 def test_a_commit_is_all_or_nothing(db: Database) -> None:
@@ -113,7 +161,7 @@ def test_a_coordinator_that_lost_its_lease_writes_nothing(db: Database) -> None:
     assert store.leases.acquire(db, run_id, successor.owner, successor.seconds)
     for write in (
         lambda: store.driving.keep_generation(db, run_id, OWNER, 1, members("z")),
-        lambda: store.driving.save_fitness(db, run_id, OWNER, 0, {0: 1.0}, "old", 0.1),
+        lambda: store.driving.save_fitness(db, run_id, OWNER, 0, [Landed({0: 1.0}, "old", 0.1)]),
         lambda: commit(db, run_id, OWNER, done=True),
     ):
         with pytest.raises(LeaseLostError):
