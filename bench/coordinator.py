@@ -1,23 +1,29 @@
-"""The coordinator's own cost: `python bench/coordinator.py [--generations G] [--tree PATH]`.
+"""The coordinator's own cost: `python bench/coordinator.py [--generations G] [--sim-seconds S]
+[--tree PATH]`.
 
 Drives `paper-voxel` runs (4x4x4, population 25) through the service's `Coordinator` on SQLite
-and on PostgreSQL with an instant evaluator (a robot's fitness is a cheap function of its file,
-no simulation), so every CPU second this process spends is the coordinator's: breeding, robot
-files, the store's writes and the generation commits. Prints CPU per individual (ms), wall time
-and generations of 25 committed per second.
+and on PostgreSQL with an evaluator that simulates nothing (a robot's fitness is a cheap function
+of its file; a batch sleeps S seconds per robot, 0.05 by default, as a worker's wall time), so
+every CPU second the run's process spends is the coordinator's: breeding, robot files, the
+store's writes and the generation commits. Each run is a fresh interpreter. Prints CPU per
+individual (ms), wall time per generation and generations of 25 committed per second.
 
-`--tree PATH` measures another checkout instead (an older commit in a `git worktree`, whose
-packages were still installed as top-level `core` and `api`): the same runs, the same evaluator,
-the version's own coordinator and store.
+`--tree PATH` also measures another checkout (an older commit in a `git worktree`, of today's
+layout or of the old one with top-level `core` and `api`), its runs interleaved with this
+checkout's in the same invocation, and prints the ratio: the same runs, the same evaluator, each
+version's own coordinator and store.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import json
 import os
 import platform
+import shutil
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -31,11 +37,11 @@ POSTGRES = os.environ.get("SOFTEVO_TEST_POSTGRES", "postgresql://postgres@127.0.
 
 def modules(tree: str | None) -> dict[str, Any]:
     """The coordinator, database and run creation of this checkout, or of the one at `tree`."""
-    if tree is None:
-        prefix, store = "softevo.", "softevo.api.store"
-    else:
+    if tree is not None and (Path(tree) / "api" / "storage.py").exists():  # the old layout
         sys.path.insert(0, tree)
         prefix, store = "", "api.storage"
+    else:  # this checkout, or a staged one first on the path
+        prefix, store = "softevo.", "softevo.api.store"
     load = importlib.import_module
     return {
         "Coordinator": load(f"{prefix}api.coordinator").Coordinator,
@@ -47,15 +53,18 @@ def modules(tree: str | None) -> dict[str, Any]:
     }
 
 
-def instant_evaluator(found: dict[str, Any]) -> Any:
+def instant_evaluator(found: dict[str, Any], sim_seconds: float = 0.0) -> Any:
     """Both generations of the evaluator interface (`evaluate_batch` + `capacity` now;
-    `evaluate_batch`, `evaluate`, `workers` and `concurrency` before), no simulation."""
+    `evaluate_batch`, `evaluate`, `workers` and `concurrency` before), no simulation: a batch
+    sleeps `sim_seconds` per robot (wall time as a worker's, none of this process's CPU)."""
     batch_result = found["BatchResult"]
 
     class Instant:
         concurrency = 2
 
         def evaluate(self, files: list[dict]) -> np.ndarray:
+            if sim_seconds:
+                time.sleep(sim_seconds * len(files))
             return np.array([
                 sum(v in ("sine", "neg_sine") for v in f["voxels"]) / len(f["voxels"])
                 for f in files
@@ -85,17 +94,28 @@ def instant_evaluator(found: dict[str, Any]) -> Any:
     return Instant()
 
 
-def drive(found: dict[str, Any], url: str, generations: int) -> tuple[float, float, int]:
+def drive(
+    found: dict[str, Any], url: str, generations: int, sim_seconds: float
+) -> tuple[float, float, int]:
     """One run to completion: (CPU seconds of this process, wall seconds, individuals)."""
     database = found["db"].Database(url)
     database.upgrade()
     config = found["resolve"]({"preset": "paper-voxel", "seed": 1, "generations": generations})
     run = found["create_run"](database, config)
-    coordinator = found["Coordinator"](database, instant_evaluator(found), batch_size=4)
+    coordinator = found["Coordinator"](
+        database, instant_evaluator(found, sim_seconds), batch_size=4
+    )
     cpu, wall = time.process_time(), time.perf_counter()
     coordinator.start()
+    if hasattr(coordinator, "join"):  # wait on the driver thread: no polling in the measurement
+        active = ("queued", "running")
+        while (
+            run.id not in coordinator.active and found["get_run"](database, run.id).status in active
+        ):
+            coordinator.wait_ticks(1, timeout=60)
+        coordinator.join(run.id, timeout=3600)
     while found["get_run"](database, run.id).status in ("queued", "running"):
-        time.sleep(0.2)  # rarely: this process's CPU is what is measured
+        time.sleep(0.2)  # rarely (old trees): this process's CPU is what is measured
     cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
     coordinator.stop()
     status = found["get_run"](database, run.id).status
@@ -105,31 +125,88 @@ def drive(found: dict[str, Any], url: str, generations: int) -> tuple[float, flo
     return cpu, wall, config.population * generations
 
 
+def measure_once(tree: str | None, database: str, generations: int, sim_seconds: float) -> None:
+    """One run in this process (of this checkout, or of `tree` when it is on the path); prints
+    its CPU seconds, wall seconds and individuals as JSON."""
+    found = modules(tree)
+    if database == "sqlite":
+        with tempfile.TemporaryDirectory() as folder:
+            row = drive(found, f"sqlite:///{Path(folder) / 'b.db'}", generations, sim_seconds)
+    else:
+        with found["db"].scratch_postgres(POSTGRES, "softevo_bench") as url:
+            row = drive(found, url, generations, sim_seconds)
+    print(json.dumps(row))
+
+
+def stage(tree: str) -> str:
+    """A folder where `import softevo.api` finds `tree`'s code: the tree as installed, or the
+    tree itself when it is of the old layout (top-level `core` and `api`)."""
+    if (Path(tree) / "api" / "storage.py").exists():
+        return tree
+    staged = Path(tempfile.mkdtemp(prefix="softevo-tree-"))
+    shutil.copytree(Path(tree) / "softevo", staged / "softevo")
+    for folder in ("core", "api", "worker", "migrations"):
+        shutil.copytree(Path(tree) / folder, staged / "softevo" / folder)
+    return str(staged)
+
+
+def run_once(
+    label: str, path: str | None, database: str, args: argparse.Namespace
+) -> tuple[float, float, int]:
+    """One run in a fresh interpreter (so neither tree's imports or caches help the other)."""
+    command = [
+        sys.executable, "-P", __file__, "--once", database, "--generations", str(args.generations),
+        "--sim-seconds", str(args.sim_seconds),
+    ]  # fmt: skip
+    env = dict(os.environ)
+    if path is not None:
+        command += ["--tree", path]
+        env["PYTHONPATH"] = path
+    out = subprocess.run(command, env=env, capture_output=True, text=True, check=False)
+    if out.returncode != 0:
+        raise SystemExit(f"{label} on {database} failed:\n{out.stderr[-3000:]}")
+    cpu, wall, individuals = json.loads(out.stdout.strip().splitlines()[-1])
+    return cpu, wall, individuals
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--generations", type=int, default=60)
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--tree", help="measure the checkout at this path instead")
+    parser.add_argument(
+        "--sim-seconds", type=float, default=0.05,
+        help="simulated seconds of wall time per robot (slept, no CPU; 0: instant)",
+    )  # fmt: skip
+    parser.add_argument("--tree", help="also measure the checkout at this path, interleaved")
+    parser.add_argument("--once", choices=["sqlite", "postgres"], help=argparse.SUPPRESS)
     args = parser.parse_args()
-    found = modules(args.tree)
-    print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-          f"Python {platform.python_version()}, tree {args.tree or 'this checkout'}")  # fmt: skip
-    print("database    CPU/individual  wall/generation  generations/s (median of repeats)")
-    for name in ("sqlite", "postgres"):
-        rows = []
+    if args.once:
+        measure_once(args.tree, args.once, args.generations, args.sim_seconds)
+        return
+    trees: list[tuple[str, str | None]] = [("this checkout", None)]
+    if args.tree:
+        trees.insert(0, (args.tree, stage(args.tree)))
+    print(
+        f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+        f"Python {platform.python_version()}, {args.generations} generations of 25, "
+        f"{args.sim_seconds:g} s per robot, median of {args.repeats} (trees interleaved)"
+    )
+    print("database  tree                CPU/individual  wall/generation  generations/s")
+    for database in ("sqlite", "postgres"):
+        rows: dict[str, list[tuple[float, float, int]]] = {label: [] for label, _ in trees}
         for _ in range(args.repeats):
-            if name == "sqlite":
-                with tempfile.TemporaryDirectory() as folder:
-                    rows.append(
-                        drive(found, f"sqlite:///{Path(folder) / 'b.db'}", args.generations)
-                    )
-            else:
-                with found["db"].scratch_postgres(POSTGRES, "softevo_bench") as url:
-                    rows.append(drive(found, url, args.generations))
-        cpu = statistics.median(c / n for c, _, n in rows) * 1e3
-        per_generation = statistics.median(w / args.generations for _, w, _ in rows)
-        print(f"{name:10}  {cpu:11.3f} ms  {per_generation * 1e3:12.2f} ms  "
-              f"{1 / per_generation:12.1f}")  # fmt: skip
+            for label, path in trees:
+                rows[label].append(run_once(label, path, database, args))
+        cpu_of = {}
+        for label, _ in trees:
+            cpu = statistics.median(c / n for c, _, n in rows[label]) * 1e3
+            wall = statistics.median(w / args.generations for _, w, _ in rows[label])
+            cpu_of[label] = cpu
+            print(f"{database:9} {label[-18:]:18} {cpu:11.3f} ms  {wall * 1e3:12.2f} ms  "
+                  f"{1 / wall:12.1f}")  # fmt: skip
+        if len(trees) == 2:
+            ratio = cpu_of[trees[0][0]] / cpu_of["this checkout"]
+            print(f"{database:9} this checkout: {ratio:.2f}x less CPU per individual")
 
 
 if __name__ == "__main__":

@@ -4,7 +4,11 @@ A real `softevo serve` (the in-process pool on every core) while, all at once:
 * a large run evaluates (8x8x8 paper-voxel, population 100: every core busy simulating),
 * 200 clients follow that run's server-sent events,
 * 20 clients ask for replays of distinct individuals at distinct frame rates, again and again,
-* one probe times `GET /healthz` and `GET /runs/{id}/curve`, ten times a second each.
+* a probe times `GET /healthz` and `GET /runs/{id}/curve`, ten times a second each.
+
+The probe runs in a process of its own (`--probe loop` puts it in the load generator's event loop
+instead, as before): in the loop that reads 200 streams and megabytes of replays, a probe's time
+includes the client's own waits for that loop, which is not the server's latency.
 
 Prints the probes' p50 and p99 latency (ms), how the replay requests were answered (200 or 503)
 and the server's peak resident memory (VmHWM of the API process, and of its pool processes).
@@ -15,12 +19,14 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import multiprocessing
 import os
 import platform
 import statistics
 import tempfile
 import time
 from collections import Counter
+from multiprocessing.queues import Queue
 from pathlib import Path
 
 import httpx
@@ -89,7 +95,22 @@ async def probe(
         await asyncio.sleep(0.1)
 
 
-async def load(local: LocalService, seconds: float) -> dict[str, object]:
+def probe_process(url: str, paths: list[str], seconds: float, out: Queue) -> None:
+    """The probe in a process of its own: each path timed ten times a second, in turn, over one
+    keep-alive connection; puts {path: [ms, ...]} on `out`."""
+    times: dict[str, list[float]] = {path: [] for path in paths}
+    with httpx.Client(base_url=url, timeout=60) as client:
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            for path in paths:
+                started = time.perf_counter()
+                client.get(path)
+                times[path].append(1e3 * (time.perf_counter() - started))
+            time.sleep(0.1)
+    out.put(times)
+
+
+async def load(local: LocalService, seconds: float, own_process: bool) -> dict[str, object]:
     limits = httpx.Limits(max_connections=SSE_CLIENTS + REPLAY_CLIENTS + 10)
     async with httpx.AsyncClient(base_url=local.url, limits=limits, timeout=60) as client:
         run_id = (await client.post("/runs", json=LARGE)).json()["id"]
@@ -101,11 +122,23 @@ async def load(local: LocalService, seconds: float) -> dict[str, object]:
         tasks = [asyncio.create_task(follow(client, run_id, stop)) for _ in range(SSE_CLIENTS)]
         tasks += [asyncio.create_task(replays(client, run_id, k, stop, answers))
                   for k in range(REPLAY_CLIENTS)]  # fmt: skip
-        tasks += [
-            asyncio.create_task(probe(client, "/healthz", stop, healthz)),
-            asyncio.create_task(probe(client, f"/runs/{run_id}/curve", stop, curve)),
-        ]
-        await asyncio.sleep(seconds)
+        paths = ["/healthz", f"/runs/{run_id}/curve"]
+        if own_process:
+            times: Queue = multiprocessing.get_context("spawn").Queue()
+            prober = multiprocessing.get_context("spawn").Process(
+                target=probe_process, args=(local.url, paths, seconds, times)
+            )
+            prober.start()
+            await asyncio.sleep(seconds)
+            measured = await asyncio.to_thread(times.get, timeout=120)
+            prober.join(30)
+            healthz, curve = measured[paths[0]], measured[paths[1]]
+        else:
+            tasks += [
+                asyncio.create_task(probe(client, paths[0], stop, healthz)),
+                asyncio.create_task(probe(client, paths[1], stop, curve)),
+            ]
+            await asyncio.sleep(seconds)
         stop.set()
         await client.post(f"/runs/{run_id}/cancel")
         await asyncio.wait(tasks, timeout=120)
@@ -123,10 +156,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seconds", type=float, default=30.0)
     parser.add_argument("--database", default="sqlite,postgres")
+    parser.add_argument(
+        "--probe", choices=["process", "loop"], default="process",
+        help="time the probes in a process of their own (default) or in the load's event loop",
+    )  # fmt: skip
     args = parser.parse_args()
     machine = f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
     print(f"# {machine}, {SSE_CLIENTS} SSE clients, {REPLAY_CLIENTS} replay clients, "
-          f"{args.seconds:g} s")  # fmt: skip
+          f"{args.seconds:g} s, probe in {args.probe}")  # fmt: skip
     for name in args.database.split(","):
         with tempfile.TemporaryDirectory() as folder:
             url = f"sqlite:///{Path(folder) / 'load.db'}"
@@ -139,7 +176,7 @@ def main() -> None:
             try:
                 with start_service(service_env(database_url=url), Path(folder) / "serve.log",
                                    "--log-level", "warning") as local:  # fmt: skip
-                    result = asyncio.run(load(local, args.seconds))
+                    result = asyncio.run(load(local, args.seconds, args.probe == "process"))
             finally:
                 if name == "postgres":
                     scratch.__exit__(None, None, None)

@@ -191,11 +191,34 @@ def _insert_members(
     )  # fmt: skip
 
 
+# The run's row after a generation, precompiled (bound parameters, not literal values: the GA
+# state is a large JSON value that would otherwise be walked for the statement's cache key).
+# The best is the GA state's best so far, so writing it every time never lowers it.
+_ADVANCE = (
+    update(RUNS)
+    .where(RUNS.c.id == bindparam("b_run"))
+    .values(
+        ga_state=bindparam("b_state", type_=RUNS.c.ga_state.type),
+        generations_done=bindparam("b_done"),
+        evaluations=RUNS.c.evaluations + bindparam("b_evaluations"),
+        saved=RUNS.c.saved + bindparam("b_saved"),
+        compute_seconds=RUNS.c.compute_seconds + bindparam("b_seconds"),
+        best_fitness=bindparam("b_best"),
+        best_generation=bindparam("b_best_generation"),
+    )
+)
+_FINISH = _ADVANCE.values(
+    status=RunStatus.COMPLETED.value, finished_at=bindparam("b_at"), lease_owner=None,
+    lease_expires=None,
+)  # fmt: skip
+
+
 def commit_generation(db: Database, run_id: int, lease: Lease, commit: GenerationCommit) -> None:
     """The generation's fitness, statistics, GA state and counters, and the next generation's
     members, all or nothing."""
     stats = commit.stats
     generation = stats["generation"]
+    best = (None, None) if commit.best is None else commit.best
     with db.write() as session:
         _fence(session, run_id, lease)
         connection = session.connection()
@@ -208,21 +231,15 @@ def commit_generation(db: Database, run_id: int, lease: Lease, commit: Generatio
             {"run_id": run_id, **{key: stats[key] for key in CURVE_FIELDS},
              "seconds": commit.seconds, "committed_at": now()},
         )  # fmt: skip
-        values: dict[str, Any] = {
-            "ga_state": commit.state,
-            "generations_done": generation + 1,
-            "evaluations": RUNS.c.evaluations + stats["evaluations"],
-            "saved": RUNS.c.saved + stats["saved"],
-            "compute_seconds": RUNS.c.compute_seconds + commit.seconds,
-        }
-        if commit.best is not None:
-            values.update(best_fitness=commit.best[0], best_generation=commit.best[1])
-        if commit.done:
-            values.update(status=RunStatus.COMPLETED.value, finished_at=now(), lease_owner=None,
-                          lease_expires=None)  # fmt: skip
-        elif commit.upcoming:
+        connection.execute(
+            _FINISH if commit.done else _ADVANCE,
+            {"b_run": run_id, "b_state": commit.state, "b_done": generation + 1,
+             "b_evaluations": stats["evaluations"], "b_saved": stats["saved"],
+             "b_seconds": commit.seconds, "b_at": now(), "b_best": best[0],
+             "b_best_generation": best[1]},
+        )  # fmt: skip
+        if not commit.done and commit.upcoming:
             _insert_members(connection, run_id, generation + 1, commit.upcoming)
-        connection.execute(update(RUNS).where(RUNS.c.id == run_id).values(**values))
 
 
 def fail(db: Database, run_id: int, owner: str, message: str) -> None:
