@@ -86,7 +86,12 @@ class Encoding(ABC):
         return self.genome(discrete, real)
 
     def genome(self, discrete: np.ndarray, real: np.ndarray) -> Genome:
-        return Genome(self.name, tuple(int(g) for g in discrete), tuple(float(g) for g in real))
+        """Genes as Python ints and floats (`tolist` gives exactly `int(g)` and `float(g)`)."""
+        return Genome(
+            self.name,
+            tuple(np.asarray(discrete, dtype=np.int64).tolist()),
+            tuple(np.asarray(real, dtype=np.float64).tolist()),
+        )
 
     def check(self, genome: Genome) -> None:
         """Refuse a genome of another encoding, the wrong length or out-of-range genes."""
