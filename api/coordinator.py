@@ -34,6 +34,7 @@ from softevo.core.evaluator import BatchResult, Evaluator
 from softevo.core.ga.algorithm import GAState, GeneticAlgorithm, Individual
 from softevo.core.generation import Engine, Hooks, Step
 from softevo.core.limits import BATCH_SIZE, IN_FLIGHT, SAVE_SECONDS
+from softevo.core.status import RunStatus
 
 log = logging.getLogger("softevo.coordinator")
 
@@ -63,6 +64,7 @@ class RunDriver(Hooks):
         self.driving = driving
         self.db = driving.db
         self.run_id = run_id
+        self.key = f"run{run_id}"  # every batch key of the run starts with it and a dash
         self.abort = threading.Event()
         self.reason = ""
         self.landed: list[Landed] = []  # batches' fitness not written yet
@@ -122,6 +124,8 @@ class RunDriver(Hooks):
             self._drive()
         except Stop as stop:
             log.info("run %s: driver stopped (%s)", self.run_id, stop)
+            if self._cancelled():  # its batches still out are given up, not finished
+                self.driving.evaluator.drop(f"{self.key}-")
             self._save_on_stop()
         except (OperationalError, InterfaceError, InternalError) as error:  # the database: said
             self.driving.faults.record(error, f"run {self.run_id}")
@@ -136,6 +140,15 @@ class RunDriver(Hooks):
                 )
             except Exception:  # the database itself is away; the lease will expire
                 log.exception("run %s: could not record the failure", self.run_id)
+
+    def _cancelled(self) -> bool:
+        """Cancelled here or through another API process (then the lease fence stopped us)."""
+        if self.reason == "cancelled":
+            return True
+        try:
+            return store.get_run(self.db, self.run_id).status == RunStatus.CANCELLED
+        except (OperationalError, InterfaceError, InternalError):
+            return False
 
     def _save_on_stop(self) -> None:
         """Stopped mid-generation (shutdown, cancel, lost lease): keep what landed if the lease
@@ -159,7 +172,7 @@ class RunDriver(Hooks):
         while not algorithm.done(state):
             self.check()
             self.generation = state.generation
-            step = engine.step(state, cache, self.driving.evaluator, self, f"run{self.run_id}")
+            step = engine.step(state, cache, self.driving.evaluator, self, self.key)
             state = step.state
             upcoming: list[Individual] = []
             if not algorithm.done(state):  # bred now, kept by the same commit

@@ -18,13 +18,13 @@ import socket
 import threading
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import CancelledError, Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
 import numpy as np
 
-from softevo.core.evaluator import BatchResult, Evaluator
+from softevo.core.evaluator import BatchDroppedError, BatchResult, Evaluator
 from softevo.core.nulls import from_nulls, to_null
 from softevo.core.physics import simulate, simulate_batch
 from softevo.core.robot import Robot, VoxelRobot
@@ -104,7 +104,12 @@ def start_pool_process() -> None:
 class PoolEvaluator(Evaluator):
     """A local pool of worker processes (default: one per core), each warmed up once. A batch
     runs in one process, across the kernel's SIMD lanes; the generation step cuts a generation
-    into at least `capacity()` batches and keeps them in flight together, one per process."""
+    into at least `capacity()` batches and keeps them in flight together, one per process.
+
+    `drop(prefix)` (a cancelled run) cancels the run's batches not yet started and, if one of
+    them runs, replaces the pool: its processes are killed (a simulation cannot be interrupted
+    in the kernel) and other runs' batches that were in it run again on the new one, uncounted,
+    with the same result."""
 
     def __init__(self, processes: int | None = None) -> None:
         self.processes = processes or os.cpu_count() or 1
@@ -112,6 +117,9 @@ class PoolEvaluator(Evaluator):
             raise ValueError(f"processes must be >= 1, got {self.processes}")
         self._lock = threading.Lock()
         self._pool = self._new_pool()
+        self._batches: dict[Future[list[float | None]], str] = {}  # in the pool: key each
+        self._dropped: set[str] = set()  # key prefixes given up
+        self._replaced: set[int] = set()  # ids of pools killed by `drop`
 
     def _new_pool(self) -> ProcessPoolExecutor:
         return ProcessPoolExecutor(
@@ -126,23 +134,52 @@ class PoolEvaluator(Evaluator):
         """Thread-safe. If a pool process dies (killed, out of memory), the pool is rebuilt and
         the batch tried once more; a batch that kills its process twice raises."""
         files = list(robot_files)
-        return _timed("PoolEvaluator", lambda: self._run(files))
+        return _timed("PoolEvaluator", lambda: self._run(files, key or ""))
 
-    def _run(self, files: list[dict[str, Any]]) -> np.ndarray:
+    def _run(self, files: list[dict[str, Any]], key: str) -> np.ndarray:
         if not files:
             return np.empty(0)
-        for attempt in (1, 2):
-            pool = self._pool
+        attempt = 1
+        while True:
+            with self._lock:
+                self._refuse_dropped(key)
+                pool = self._pool
+                future = pool.submit(evaluate_robot_files, files)
+                self._batches[future] = key
             try:
-                return from_nulls(pool.submit(evaluate_robot_files, files).result())
-            except BrokenProcessPool:
-                if attempt == 2:
-                    raise
+                return from_nulls(future.result())
+            except (BrokenProcessPool, CancelledError):
                 with self._lock:
+                    self._refuse_dropped(key)
+                    if id(pool) in self._replaced:  # another run's cancel: not this batch's
+                        continue
+                    if attempt == 2:
+                        raise
+                    attempt += 1
                     if self._pool is pool:  # the first thread to notice rebuilds it
                         pool.shutdown(wait=False, cancel_futures=True)
                         self._pool = self._new_pool()
-        raise AssertionError("unreachable")
+            finally:
+                with self._lock:
+                    self._batches.pop(future, None)
+
+    def _refuse_dropped(self, key: str) -> None:
+        if key and any(key.startswith(prefix) for prefix in self._dropped):
+            raise BatchDroppedError(f"batch {key} was dropped")
+
+    def drop(self, key_prefix: str) -> None:
+        with self._lock:
+            self._dropped.add(key_prefix)
+            mine = [future for future, key in self._batches.items() if key.startswith(key_prefix)]
+            running = [future for future in mine if not future.cancel()]
+            if not running:
+                return
+            old, self._pool = self._pool, self._new_pool()
+            self._replaced.add(id(old))
+        for process in list(getattr(old, "_processes", {}).values()):  # stdlib keeps them here
+            with contextlib.suppress(OSError):
+                process.kill()
+        old.shutdown(wait=False, cancel_futures=True)
 
     def capacity(self) -> int:
         return self.processes

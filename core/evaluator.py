@@ -33,6 +33,10 @@ class BatchResult:
     seconds: float
 
 
+class BatchDroppedError(RuntimeError):
+    """The batch was given up (`Evaluator.drop`, a cancelled run): no fitness, nobody waits."""
+
+
 class Evaluator(ABC):
     """Simulates batches of robots. Thread-safe: the generation step keeps several batches in
     flight at once (one thread each), and `capacity()` says how many of them run at the same
@@ -53,6 +57,12 @@ class Evaluator(ABC):
     @abstractmethod
     def close(self) -> None:
         """Free what the backend holds (processes, connections)."""
+
+    def drop(self, key_prefix: str) -> None:  # noqa: B027 - optional: by default a no-op
+        """Give up the batches whose key starts with `key_prefix` (a cancelled run's): none of
+        them starts any more, one running stops where the backend can stop it, and their
+        `evaluate_batch` calls raise `BatchDroppedError` within seconds. By default nothing is
+        given up: an in-process evaluator finishes what it began."""
 
     def __enter__(self) -> Self:
         return self

@@ -2,7 +2,8 @@
 the local process pool, and RQ workers on a private Redis (two real `softevo worker` processes).
 
 What the generation step relies on (`softevo.core.evaluator.Evaluator`, whose whole interface is
-`evaluate_batch`, `capacity`, `close` and a context manager): the same robot files give the same
+`evaluate_batch`, `capacity`, `close`, a context manager and an optional `drop` for a cancelled
+run's batches): the same robot files give the same
 fitness, bit for bit, in the same order, whichever backend, process or batch simulated them; an
 empty batch is an empty array; a robot file that cannot be built is NaN (failed, never 0) for
 that robot alone; a batch's key changes nothing in its result; and batches evaluated from many
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 import copy
 import math
+import time
 import uuid
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
@@ -23,7 +25,7 @@ import pytest
 
 from softevo.core.config import resolve
 from softevo.core.evaluation import PoolEvaluator, SerialEvaluator
-from softevo.core.evaluator import Evaluator
+from softevo.core.evaluator import BatchDroppedError, Evaluator
 from softevo.core.evolution import Evolution
 from softevo.core.robot_file import robot_to_json
 from softevo.worker.evaluator import RQEvaluator
@@ -212,3 +214,53 @@ def test_every_backend_is_the_one_narrow_interface(evaluator: Evaluator) -> None
     assert Evaluator.__abstractmethods__ == {"evaluate_batch", "capacity", "close"}
     for name in ("evaluate", "workers", "concurrency"):  # the old second ways, gone
         assert not hasattr(evaluator, name), name
+
+
+def lengthened(files: list[dict[str, Any]], duration: float) -> list[dict[str, Any]]:
+    longer = copy.deepcopy(files)
+    for file in longer:
+        file["sim"]["duration"] = duration
+    return longer
+
+
+def test_dropped_batches_stop_within_seconds_and_the_others_go_on(
+    evaluator: Evaluator, files: dict[int, list[dict[str, Any]]]
+) -> None:
+    """A cancelled run's batches (`drop("runX-")`), one running and one waiting, each of about
+    half a minute: the pool and RQ give both up within seconds, and another run's batch in
+    flight at the same moment still gets its own fitness, bit for bit. In process (serial),
+    `drop` gives up nothing: a batch of the dropped prefix is evaluated as usual."""
+    if isinstance(evaluator, SerialEvaluator):
+        evaluator.drop("serial-dropped-")
+        result = evaluator.evaluate_batch(files[1][:2], "serial-dropped-gen0")
+        assert np.isfinite(result.fitness).all()
+        return
+    run = uuid.uuid4().hex[:8]
+    long = lengthened(files[1][:2], 1200.0)  # many seconds a robot on this machine
+    other = lengthened(files[2][:1], 300.0)
+    expected = SerialEvaluator().evaluate_batch(other).fitness
+    with ThreadPoolExecutor(max_workers=3) as threads:
+        first = threads.submit(evaluator.evaluate_batch, long[:1], f"runX{run}-gen0-a")
+        others = threads.submit(evaluator.evaluate_batch, other, f"runY{run}-gen0-a")
+        second = threads.submit(evaluator.evaluate_batch, long[1:], f"runX{run}-gen0-b")
+        time.sleep(1.5)  # every batch handed over: two running, one waiting
+        dropped_at = time.monotonic()
+        evaluator.drop(f"runX{run}-")
+        for future in (first, second):
+            with pytest.raises(BatchDroppedError, match=f"runX{run}"):
+                future.result(timeout=20)
+        took = time.monotonic() - dropped_at
+        result = others.result(timeout=120)
+    print(f"[drop] {type(evaluator).__name__}: both dropped batches gave up {took:.2f} s after")
+    assert took < 10
+    assert np.array_equal(result.fitness, expected, equal_nan=True)
+    if isinstance(evaluator, RQEvaluator):  # nothing of the dropped run left queued or running
+        deadline = time.monotonic() + 10
+        while True:
+            left = [job for job in (*evaluator.queue.job_ids,
+                                    *evaluator.queue.started_job_registry.get_job_ids())
+                    if f"runX{run}" in job]  # fmt: skip
+            if not left or time.monotonic() > deadline:
+                break
+            time.sleep(0.2)
+        assert left == []

@@ -30,10 +30,11 @@ import numpy as np
 from redis.exceptions import ConnectionError as RedisConnectionError
 from redis.exceptions import TimeoutError as RedisTimeoutError
 from rq import Queue, Worker
-from rq.exceptions import NoSuchJobError
+from rq.command import send_stop_job_command
+from rq.exceptions import InvalidJobOperation, NoSuchJobError
 from rq.job import Job, JobStatus
 
-from softevo.core.evaluator import BatchResult, Evaluator, batch_digest
+from softevo.core.evaluator import BatchDroppedError, BatchResult, Evaluator, batch_digest
 from softevo.core.nulls import from_nulls
 from softevo.worker.queue import (
     JOB_FUNCTION,
@@ -79,6 +80,7 @@ class RQEvaluator(Evaluator):
         self._lock = threading.Lock()
         self._workers = (1, -math.inf)  # (live workers on the queue, when counted)
         self._empty_since: float | None = None  # when the count was first seen 0
+        self._dropped: set[str] = set()  # key prefixes given up (`drop`)
 
     # -- the interface -------------------------------------------------------------------------
 
@@ -130,6 +132,28 @@ class RQEvaluator(Evaluator):
         in `/healthz` and on its runs past a deadline, instead of waiting in silence."""
         self._count()
         return 0.0 if self._empty_since is None else time.monotonic() - self._empty_since
+
+    def drop(self, key_prefix: str) -> None:
+        """Give up a cancelled run's batches: each waiting `collect` of theirs, within
+        `poll_seconds`, deletes its queued jobs, stops its started ones on their workers (RQ's
+        stop-job command: the work horse is killed) and raises `BatchDroppedError`."""
+        with self._lock:
+            self._dropped.add(key_prefix)
+
+    def _give_up_if_dropped(self, key: str, attempts: int) -> None:
+        with self._lock:
+            dropped = any(key.startswith(prefix) for prefix in self._dropped)
+        if not dropped:
+            return
+        for n in range(1, attempts + 1):
+            with contextlib.suppress(NoSuchJobError, InvalidJobOperation, *REDIS_DOWN):
+                job = Job.fetch(f"softevo-{key}-a{n}", connection=self.connection,
+                                serializer=SERIALIZER)  # fmt: skip
+                if job.get_status(refresh=False) == JobStatus.STARTED:
+                    send_stop_job_command(self.connection, job.id, serializer=SERIALIZER)
+                else:
+                    job.delete()
+        raise BatchDroppedError(f"batch {key} was dropped")
 
     def close(self) -> None:
         self.connection.close()
@@ -191,6 +215,7 @@ class RQEvaluator(Evaluator):
         late: set[str] = set()  # attempts presumed lost with their worker
         started = time.monotonic()
         while True:
+            self._give_up_if_dropped(key, attempt)
             if timeout is not None and time.monotonic() - started > timeout:
                 self._retire(key, attempt, late | {f"softevo-{key}-a{attempt}"}, None)
                 return {"error": f"no result in {timeout:g} s (are workers running?)"}

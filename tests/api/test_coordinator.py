@@ -235,3 +235,40 @@ def test_fitness_waiting_for_its_write_is_saved_at_a_shutdown(db: Database) -> N
     evolution.run(SerialEvaluator())
     assert store.curve(db, run.id) == evolution.curve()
     assert successor.robots == record.evaluations - 6
+
+
+class Dropping(FreezingEvaluator):
+    """Hangs after `calls` batches and records what it is asked to drop (then releases)."""
+
+    def __init__(self, calls: int) -> None:
+        super().__init__(calls)
+        self.dropped: list[str] = []
+
+    def drop(self, key_prefix: str) -> None:
+        self.dropped.append(key_prefix)
+        self.release.set()
+
+
+@pytest.mark.parametrize("where", ["this coordinator", "another API process"])
+def test_a_cancel_drops_the_runs_batches_still_out(db: Database, where: str) -> None:
+    """Cancelled through this coordinator, or in the database by another API process (the lease
+    fence stops the driver at its next heartbeat): the evaluator is told to give up the run's
+    batches (`run<id>-`)."""
+    run = store.create_run(db, resolve(REQUEST))
+    evaluator = Dropping(calls=2)
+    coordinator = Coordinator(db, evaluator, batch_size=2, lease_seconds=0.6, poll_seconds=0.05)
+    coordinator.start()
+    try:
+        deadline = time.monotonic() + 60
+        while evaluator.calls >= 0:
+            assert time.monotonic() < deadline
+            time.sleep(0.02)
+        store.cancel_run(db, run.id)
+        if where == "this coordinator":
+            coordinator.cancel(run.id)
+        assert coordinator.join(run.id, timeout=30)
+    finally:
+        evaluator.release.set()
+        coordinator.stop()
+    assert evaluator.dropped == [f"run{run.id}-"]
+    assert store.get_run(db, run.id).status == "cancelled"

@@ -30,7 +30,7 @@ LONG = {
     "preset": "quick",
     "seed": 3,
     "population": 8,
-    "generations": 500,
+    "generations": 3000,  # runs past the module however fast the service is: cancelled at the end
     "sim": {"duration": 3.0, "settle_time": 0.3},
 }
 
