@@ -223,6 +223,7 @@ def lengthened(files: list[dict[str, Any]], duration: float) -> list[dict[str, A
     return longer
 
 
+@pytest.mark.fault
 def test_dropped_batches_stop_within_seconds_and_the_others_go_on(
     evaluator: Evaluator, files: dict[int, list[dict[str, Any]]]
 ) -> None:

@@ -371,8 +371,15 @@ def test_sigkill_inside_the_generation_commit_transaction(
                     ),
                     {"run": run_id, "g": done},
                 )
+                upcoming = connection.scalar(
+                    text(
+                        "SELECT count(*) FROM individuals WHERE run_id = :run AND generation = :n"
+                    ),
+                    {"run": run_id, "n": done + 1},
+                )
             assert done == generations, "the run's counter and its generation rows disagree"
             assert cached == 0, "a rolled-back commit left cached fitness behind"
+            assert upcoming == 0, "a rolled-back commit left the next generation's members"
             if done == row[1]:  # the commit seen in flight never landed: it was rolled back
                 caught = (done, row[0].split(" SET")[0].split(" (")[0])
                 break

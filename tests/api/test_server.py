@@ -72,6 +72,7 @@ def read_response(sock: socket.socket) -> bytes:
     return head
 
 
+@pytest.mark.fault
 def test_a_head_that_trickles_in_is_cut_off(service: LocalService) -> None:
     """A slowloris client: the request line and then a header byte every 0.2 s, forever."""
     with connect(service) as sock:
@@ -126,6 +127,7 @@ def test_the_deadline_is_for_the_head_not_a_slow_body(service: LocalService) -> 
         assert read_response(sock).startswith(b"HTTP/1.1 422")
 
 
+@pytest.mark.fault
 def test_an_idle_keep_alive_connection_is_closed_and_a_busy_one_kept(
     service: LocalService,
 ) -> None:

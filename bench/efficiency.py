@@ -1,0 +1,199 @@
+"""How close evolution runs to the speed of the physics: `python bench/efficiency.py
+[--workload paper-voxel,sweep,paper-cube] [--path run,service,service-rq] [--generations G]`.
+
+For each workload and path: the wall time of the work through that path, and the physics bound
+for exactly the robots that path simulated (the same robot files, re-simulated here in full SIMD
+batches, `simulate_batch(..., threads=cores)`, in this one process), and their ratio bound /
+wall (1.0: nothing but simulation). Paths:
+
+* `run`: `softevo run` in process (`Evolution` and the local pool on every core), the robots
+  recorded as they are evaluated;
+* `service`: a real `softevo serve` on SQLite with its local pool, the run or sweep sent over
+  HTTP and timed from the request to its last run completed; the robots read back from the
+  database (every individual that was simulated, not those from the cache);
+* `service-rq`: the same with a private redis-server and two `softevo worker` processes.
+
+Workloads: `paper-voxel` (4x4x4, seed 1, 25 x G generations, 100 by default), `sweep` (the
+paper's nine boxes x seeds 1-3 as one `POST /sweeps`, G generations each; `run` path: the 27 runs
+one after another), `paper-cube` (the 28-spring cube, 30 x G, 1000 by default). Every path warms
+its kernels first (a small untimed run), and the bound is measured after the path, in the same
+invocation.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import os
+import platform
+import sqlite3
+import tempfile
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import httpx
+from benchlib import cpu_model
+from service import Processes, start_redis, start_workers
+
+from softevo.core.config import RunConfig, resolve
+from softevo.core.evaluation import PoolEvaluator
+from softevo.core.evaluator import BatchResult, Evaluator
+from softevo.core.evolution import Evolution
+from softevo.core.genome import Genome
+from softevo.core.physics import simulate_batch
+from softevo.core.robot_file import parse_robot, robot_to_json
+from softevo.local_service import service_env, start_service
+
+BOXES = ([3, 3, 6], [4, 4, 3], [4, 4, 4], [5, 5, 3], [5, 5, 4], [5, 5, 5], [6, 6, 3], [6, 6, 6],
+         [9, 9, 2])  # fmt: skip
+SEEDS = (1, 2, 3)
+
+
+def workload(name: str, generations: int | None) -> list[dict[str, Any]]:
+    """The run requests of a workload."""
+    if name == "paper-voxel":
+        return [{"preset": "paper-voxel", "seed": 1, "generations": generations or 100}]
+    if name == "paper-cube":
+        return [{"preset": "paper-cube", "seed": 1, "generations": generations or 1000}]
+    return [
+        {"preset": "paper-voxel", "seed": seed, "shape": box, "generations": generations or 100}
+        for box in BOXES
+        for seed in SEEDS
+    ]
+
+
+class Recording(Evaluator):
+    """The local pool, keeping every robot file it was given."""
+
+    def __init__(self, inner: Evaluator) -> None:
+        self.inner, self.files = inner, []
+
+    def evaluate_batch(self, robot_files: Any, key: str | None = None) -> BatchResult:
+        self.files.extend(robot_files)
+        return self.inner.evaluate_batch(robot_files, key)
+
+    def capacity(self) -> int:
+        return self.inner.capacity()
+
+    def close(self) -> None:
+        self.inner.close()
+
+
+def through_run(requests: list[dict[str, Any]]) -> tuple[float, list[dict[str, Any]]]:
+    """`softevo run`'s path: each run in this process, one after another, on the local pool."""
+    with PoolEvaluator() as pool:
+        Evolution.start(resolve({"preset": "quick", "generations": 2})).run(pool)  # warm
+        recording = Recording(pool)
+        started = time.perf_counter()
+        for request in requests:
+            Evolution.start(resolve(request)).run(recording)
+        return time.perf_counter() - started, recording.files
+
+
+def simulated_files(database: Path) -> list[dict[str, Any]]:
+    """Every robot the service simulated (evaluated or failed, not cached), as robot files."""
+    with contextlib.closing(sqlite3.connect(database)) as connection:
+        rows = connection.execute(
+            "SELECT r.config, i.genome FROM individuals i JOIN runs r ON r.id = i.run_id "
+            "WHERE i.status IN ('evaluated', 'failed') AND r.id > 1"  # run 1: the warm-up
+        ).fetchall()
+    files = []
+    configs: dict[str, RunConfig] = {}
+    for config_json, genome_json in rows:
+        config = configs.setdefault(config_json, RunConfig.model_validate(json.loads(config_json)))
+        genome = Genome.from_json(json.loads(genome_json))
+        files.append(robot_to_json(config.make_encoding().to_robot(genome, config.sim)))
+    return files
+
+
+@contextlib.contextmanager
+def redis_workers(folder: Path) -> Iterator[str]:
+    """A private redis-server and two warm `softevo worker` processes: the Redis URL."""
+    processes = Processes(folder)
+    try:
+        url = start_redis(processes, "redis")
+        start_workers(processes, url, "fork")
+        yield url
+    finally:
+        processes.stop_all()
+
+
+def wait_completed(client: httpx.Client, run_ids: list[int]) -> None:
+    pending = set(run_ids)
+    while pending:
+        time.sleep(0.5)
+        for run_id in list(pending):
+            status = client.get(f"/runs/{run_id}").json()["status"]
+            if status == "completed":
+                pending.discard(run_id)
+            elif status not in ("queued", "running"):
+                raise SystemExit(f"run {run_id} ended {status}")
+
+
+def through_service(
+    requests: list[dict[str, Any]], sweep: bool, redis: bool, folder: Path
+) -> tuple[float, list[dict[str, Any]]]:
+    database = folder / "efficiency.db"
+    with contextlib.ExitStack() as stack:
+        settings = {"database_url": f"sqlite:///{database}"}
+        if redis:
+            settings["redis_url"] = stack.enter_context(redis_workers(folder))
+        local = stack.enter_context(
+            start_service(service_env(**settings), folder / "serve.log", "--log-level", "warning")
+        )
+        client = stack.enter_context(httpx.Client(base_url=local.url, timeout=60))
+        warm = client.post("/runs", json={"preset": "quick", "generations": 2}).json()["id"]
+        wait_completed(client, [warm])
+        started = time.perf_counter()
+        if sweep:
+            base = {
+                key: value for key, value in requests[0].items() if key not in ("shape", "seed")
+            }
+            body = {**base, "shapes": BOXES, "seeds": list(SEEDS)}
+            created = client.post("/sweeps", json=body)
+            created.raise_for_status()
+            run_ids = [run_id for box in created.json()["boxes"] for run_id in box["run_ids"]]
+        else:
+            run_ids = [client.post("/runs", json=request).json()["id"] for request in requests]
+        wait_completed(client, run_ids)
+        wall = time.perf_counter() - started
+    return wall, simulated_files(database)
+
+
+def bound(files: list[dict[str, Any]]) -> float:
+    """Seconds to simulate `files` in full SIMD batches on every core, in this process."""
+    robots = [parse_robot(file) for file in files]
+    simulate_batch(robots[:1])  # kernels loaded
+    started = time.perf_counter()
+    simulate_batch(robots, threads=os.cpu_count() or 1)
+    return time.perf_counter() - started
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--workload", default="paper-voxel,sweep,paper-cube")
+    parser.add_argument("--path", default="run,service,service-rq")
+    parser.add_argument("--generations", type=int, help="generations of every run")
+    args = parser.parse_args()
+    print(f"# {cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}")
+    print("workload     path         simulations    wall (s)   bound (s)   bound/wall")
+    for name in args.workload.split(","):
+        requests = workload(name, args.generations)
+        for path in args.path.split(","):
+            with tempfile.TemporaryDirectory() as folder:
+                if path == "run":
+                    wall, files = through_run(requests)
+                else:
+                    wall, files = through_service(
+                        requests, name == "sweep", path == "service-rq", Path(folder)
+                    )
+            physics = bound(files)
+            print(f"{name:12} {path:12} {len(files):11d} {wall:11.1f} {physics:11.1f} "
+                  f"{physics / wall:12.2f}", flush=True)  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()
