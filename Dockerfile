@@ -27,5 +27,12 @@ RUN pip install --no-deps --no-build-isolation . \
     && chown -R softevo:softevo /app /data /home/softevo/.cache
 
 USER softevo
+# The physics kernels compiled now, as the user that runs them, into the numba cache: a worker
+# container (whose named volume on that folder starts as a copy of it) takes jobs within seconds
+# of starting instead of compiling first. `-P`: /app/softevo, the source folder, must not stand
+# in for the installed package. On a CPU whose features differ from the build machine's, numba
+# compiles again by itself; it never computes differently.
+RUN python -P -c "from softevo.core.evaluation import warm_up; warm_up()" \
+    && test -n "$(ls -A "$NUMBA_CACHE_DIR")"
 EXPOSE 8000
 CMD ["softevo", "serve", "--host", "0.0.0.0", "--port", "8000"]

@@ -120,6 +120,13 @@ def test_dockerfile_runs_as_non_root_and_copies_every_package() -> None:
         assert f"COPY {package} " in dockerfile, f"Dockerfile does not copy {package}/"
     # The numba cache volume is mounted here: it must exist, owned by the user, in the image.
     assert "/home/softevo/.cache/numba" in dockerfile
+    # ... and hold the compiled kernels: compiled at build time, as that user, after the install
+    warm = re.search(
+        r"^RUN python -P -c .*softevo\.core\.evaluation import warm_up; warm_up\(\)", dockerfile, re.M
+    )
+    user = dockerfile.rindex("\nUSER ")
+    assert warm and warm.start() > user > on_lock.start(), "kernels not compiled into the image"
+    assert re.search(r"^ENV [^#]*NUMBA_CACHE_DIR=/home/softevo/\.cache/numba", dockerfile, re.M)
 
 
 def test_only_the_api_publishes_a_port_and_it_is_the_one_it_serves() -> None:
