@@ -79,10 +79,14 @@ class RunDriver(Hooks):
         self.abort.set()
 
     def check(self) -> None:
+        """Called every 0.2 s while batches run: stops the step, or writes fitness that has
+        waited `save_seconds` for a write (so none waits longer, however slow the rest)."""
         if self.abort.is_set():
             raise Stop(self.reason)
         if self.driving.stopping.is_set():
             raise Stop("shutdown")
+        if self.landed and self.generation is not None and self._due():
+            self._save(self.generation)
 
     # -- the hooks of the generation step -------------------------------------------------------
 
@@ -98,8 +102,11 @@ class RunDriver(Hooks):
     def batch(self, generation: int, indices: list[int], result: BatchResult) -> None:
         fitness = dict(zip(indices, result.fitness.tolist(), strict=True))
         self.landed.append(Landed(fitness, result.worker, result.seconds / max(1, len(indices))))
-        if time.monotonic() - self.written >= self.driving.save_seconds:
+        if self._due():
             self._save(generation)
+
+    def _due(self) -> bool:
+        return time.monotonic() - self.written >= self.driving.save_seconds
 
     def _save(self, generation: int) -> None:
         """Write the fitness that landed and waits (one statement for all its batches)."""
@@ -124,8 +131,7 @@ class RunDriver(Hooks):
             self._drive()
         except Stop as stop:
             log.info("run %s: driver stopped (%s)", self.run_id, stop)
-            if self._cancelled():  # its batches still out are given up, not finished
-                self.driving.evaluator.drop(f"{self.key}-")
+            self._drop_if_cancelled()
             self._save_on_stop()
         except (OperationalError, InterfaceError, InternalError) as error:  # the database: said
             self.driving.faults.record(error, f"run {self.run_id}")
@@ -141,14 +147,17 @@ class RunDriver(Hooks):
             except Exception:  # the database itself is away; the lease will expire
                 log.exception("run %s: could not record the failure", self.run_id)
 
-    def _cancelled(self) -> bool:
-        """Cancelled here or through another API process (then the lease fence stopped us)."""
-        if self.reason == "cancelled":
-            return True
+    def _drop_if_cancelled(self) -> None:
+        """Cancelled here or through another API process (then the lease fence stopped us):
+        the run's batches still out are given up, not finished."""
         try:
-            return store.get_run(self.db, self.run_id).status == RunStatus.CANCELLED
-        except (OperationalError, InterfaceError, InternalError):
-            return False
+            cancelled = self.reason == "cancelled" or (
+                store.get_run(self.db, self.run_id).status == RunStatus.CANCELLED
+            )
+            if cancelled:
+                self.driving.evaluator.drop(f"{self.key}-")
+        except Exception:  # a backend that cannot drop: its batches finish, nothing is lost
+            log.exception("run %s: could not give up the cancelled run's batches", self.run_id)
 
     def _save_on_stop(self) -> None:
         """Stopped mid-generation (shutdown, cancel, lost lease): keep what landed if the lease

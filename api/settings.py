@@ -7,6 +7,7 @@ for, so a request that would occupy the service for days is refused before anyth
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass, field, fields
 from functools import lru_cache
@@ -89,10 +90,11 @@ class Settings:
             raise ValueError("SOFTEVO_WORKERS: must be >= 1")
         if settings.lease_seconds <= 0 or settings.poll_seconds <= 0:
             raise ValueError("SOFTEVO_LEASE_SECONDS and SOFTEVO_POLL_SECONDS must be > 0")
-        if settings.save_seconds < 0:
-            raise ValueError("SOFTEVO_SAVE_SECONDS: must be >= 0 (0: every batch at once)")
-        if settings.header_seconds <= 0 or settings.keep_alive_seconds <= 0:
-            raise ValueError("SOFTEVO_HEADER_SECONDS and SOFTEVO_KEEP_ALIVE_SECONDS must be > 0")
+        if not 0 <= settings.save_seconds < math.inf:
+            raise ValueError("SOFTEVO_SAVE_SECONDS: must be a number >= 0 (0: every batch at once)")
+        for name in ("header_seconds", "keep_alive_seconds"):
+            if not 0 < getattr(settings, name) < math.inf:
+                raise ValueError(f"SOFTEVO_{name.upper()}: must be a number of seconds > 0")
         return settings
 
 

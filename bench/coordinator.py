@@ -17,6 +17,7 @@ version's own coordinator and store.
 from __future__ import annotations
 
 import argparse
+import atexit
 import importlib
 import json
 import os
@@ -187,7 +188,10 @@ def main() -> None:
         return
     trees: list[tuple[str, str | None]] = [("this checkout", None)]
     if args.tree:
-        trees.insert(0, (args.tree, stage(args.tree)))
+        staged = stage(args.tree)
+        if staged != args.tree:
+            atexit.register(shutil.rmtree, staged, True)
+        trees.insert(0, (args.tree, staged))
     print(
         f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
         f"Python {platform.python_version()}, {args.generations} generations of 25, "

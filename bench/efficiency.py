@@ -17,7 +17,9 @@ Workloads: `paper-voxel` (4x4x4, seed 1, 25 x G generations, 100 by default), `s
 paper's nine boxes x seeds 1-3 as one `POST /sweeps`, G generations each; `run` path: the 27 runs
 one after another), `paper-cube` (the 28-spring cube, 30 x G, 1000 by default). Every path warms
 its kernels first (a small untimed run), and the bound is measured after the path, in the same
-invocation.
+invocation. `--widths` prints only the kernel's per-robot cost against the number of robots
+in one call (1, 2, 3, 5, 8). `--max-running N` sets the service's SOFTEVO_MAX_RUNNING (runs
+driven at once).
 """
 
 from __future__ import annotations
@@ -134,11 +136,13 @@ def wait_completed(client: httpx.Client, run_ids: list[int]) -> None:
 
 
 def through_service(
-    requests: list[dict[str, Any]], sweep: bool, redis: bool, folder: Path
+    requests: list[dict[str, Any]], sweep: bool, redis: bool, folder: Path, max_running: int | None
 ) -> tuple[float, list[dict[str, Any]]]:
     database = folder / "efficiency.db"
     with contextlib.ExitStack() as stack:
         settings = {"database_url": f"sqlite:///{database}"}
+        if max_running is not None:
+            settings["max_running"] = str(max_running)
         if redis:
             settings["redis_url"] = stack.enter_context(redis_workers(folder))
         local = stack.enter_context(
@@ -172,13 +176,40 @@ def bound(files: list[dict[str, Any]]) -> float:
     return time.perf_counter() - started
 
 
+def widths(repeats: int = 3) -> None:
+    """Per-robot cost of one kernel call against its width (robots of a 4x4x4 paper-voxel run's
+    first generation, one thread): what a generation of a few new robots pays per robot."""
+    evolution = Evolution.start(resolve({"preset": "paper-voxel", "seed": 1}))
+    robots = [evolution.robot(item) for item in evolution.individuals()[:8]]
+    simulate_batch(robots[:1])
+    print("robots in one call   seconds per robot   against 8 at once")
+    per: dict[int, float] = {}
+    for width in (8, 1, 2, 3, 5):
+        times = []
+        for _ in range(repeats):
+            started = time.perf_counter()
+            simulate_batch(robots[:width])
+            times.append((time.perf_counter() - started) / width)
+        per[width] = min(times)
+    for width in (1, 2, 3, 5, 8):
+        print(f"{width:17d} {per[width]:19.3f} {per[width] / per[8]:19.2f}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--workload", default="paper-voxel,sweep,paper-cube")
     parser.add_argument("--path", default="run,service,service-rq")
     parser.add_argument("--generations", type=int, help="generations of every run")
+    parser.add_argument("--max-running", type=int, help="the service's SOFTEVO_MAX_RUNNING")
+    parser.add_argument(
+        "--widths", action="store_true", help="only the kernel's per-robot cost by call width"
+    )
     args = parser.parse_args()
-    print(f"# {cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}")
+    if args.widths:
+        widths()
+        return
+    print(f"# {cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
+          f"SOFTEVO_MAX_RUNNING {args.max_running or 'default'}")  # fmt: skip
     print("workload     path         simulations    wall (s)   bound (s)   bound/wall")
     for name in args.workload.split(","):
         requests = workload(name, args.generations)
@@ -188,8 +219,9 @@ def main() -> None:
                     wall, files = through_run(requests)
                 else:
                     wall, files = through_service(
-                        requests, name == "sweep", path == "service-rq", Path(folder)
-                    )
+                        requests, name == "sweep", path == "service-rq", Path(folder),
+                        args.max_running,
+                    )  # fmt: skip
             physics = bound(files)
             print(f"{name:12} {path:12} {len(files):11d} {wall:11.1f} {physics:11.1f} "
                   f"{physics / wall:12.2f}", flush=True)  # fmt: skip

@@ -17,6 +17,7 @@ import os
 import socket
 import threading
 import time
+import weakref
 from collections.abc import Callable, Sequence
 from concurrent.futures import CancelledError, Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
@@ -106,10 +107,10 @@ class PoolEvaluator(Evaluator):
     runs in one process, across the kernel's SIMD lanes; the generation step cuts a generation
     into at least `capacity()` batches and keeps them in flight together, one per process.
 
-    `drop(prefix)` (a cancelled run) cancels the run's batches not yet started and, if one of
-    them runs, replaces the pool: its processes are killed (a simulation cannot be interrupted
-    in the kernel) and other runs' batches that were in it run again on the new one, uncounted,
-    with the same result."""
+    `drop(prefix)` (a cancelled run) cancels the run's batches not yet handed to a process and,
+    if one of them runs or waits in the pool's call queue, replaces the pool: its processes are
+    killed (a simulation cannot be interrupted inside the kernel) and other runs' batches that
+    were in it run again on the new one, uncounted, with the same result."""
 
     def __init__(self, processes: int | None = None) -> None:
         self.processes = processes or os.cpu_count() or 1
@@ -119,7 +120,7 @@ class PoolEvaluator(Evaluator):
         self._pool = self._new_pool()
         self._batches: dict[Future[list[float | None]], str] = {}  # in the pool: key each
         self._dropped: set[str] = set()  # key prefixes given up
-        self._replaced: set[int] = set()  # ids of pools killed by `drop`
+        self._replaced: weakref.WeakSet[ProcessPoolExecutor] = weakref.WeakSet()  # by `drop`
 
     def _new_pool(self) -> ProcessPoolExecutor:
         return ProcessPoolExecutor(
@@ -144,14 +145,16 @@ class PoolEvaluator(Evaluator):
             with self._lock:
                 self._refuse_dropped(key)
                 pool = self._pool
-                future = pool.submit(evaluate_robot_files, files)
-                self._batches[future] = key
+            future: Future[list[float | None]] | None = None
             try:
+                with self._lock:
+                    future = pool.submit(evaluate_robot_files, files)
+                    self._batches[future] = key
                 return from_nulls(future.result())
             except (BrokenProcessPool, CancelledError):
                 with self._lock:
                     self._refuse_dropped(key)
-                    if id(pool) in self._replaced:  # another run's cancel: not this batch's
+                    if pool in self._replaced:  # another run's cancel: not this batch's
                         continue
                     if attempt == 2:
                         raise
@@ -161,7 +164,7 @@ class PoolEvaluator(Evaluator):
                         self._pool = self._new_pool()
             finally:
                 with self._lock:
-                    self._batches.pop(future, None)
+                    self._batches.pop(future, None)  # type: ignore[arg-type]
 
     def _refuse_dropped(self, key: str) -> None:
         if key and any(key.startswith(prefix) for prefix in self._dropped):
@@ -175,7 +178,7 @@ class PoolEvaluator(Evaluator):
             if not running:
                 return
             old, self._pool = self._pool, self._new_pool()
-            self._replaced.add(id(old))
+            self._replaced.add(old)
         for process in list(getattr(old, "_processes", {}).values()):  # stdlib keeps them here
             with contextlib.suppress(OSError):
                 process.kill()

@@ -17,9 +17,9 @@ BATCH_SIZE = 4
 #: Batches of one run in flight at once by default (SOFTEVO_QUEUED_BATCHES in the service).
 IN_FLIGHT = 64
 #: The service saves a batch's fitness as it lands unless the run was written less than this
-#: long ago (s; SOFTEVO_SAVE_SECONDS): then it waits for the next write, at the latest the
-#: generation's commit. So quick generations cost one transaction, and a crash loses at most
-#: this much finished evaluation per run.
+#: long ago (s; SOFTEVO_SAVE_SECONDS): then it waits for the next write, at most this long. So
+#: quick generations cost one transaction, and a crash loses at most about this much finished
+#: evaluation per run (besides the batches in flight).
 SAVE_SECONDS = 1.0
 #: Most mass positions one replay carries (frames x masses), about 20 MB of JSON.
 MAX_REPLAY_POSITIONS = 1_000_000

@@ -10,6 +10,7 @@ machine run them, and this side owns completion.
   Redis is away, this side waits and retries. RQ's own abandoned-job detection is not relied on.
 * A batch whose job raised, or that ran out of attempts, is retried robot by robot, so only the
   robot that fails is marked failed (NaN), once; it never loops.
+* A cancelled run's batches (`drop`) are given up: queued jobs deleted, started ones stopped.
 
 Only redis, rq and numpy are imported here: the API process enqueues without loading the physics.
 """
@@ -22,7 +23,7 @@ import logging
 import math
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from datetime import UTC, datetime
 from typing import Any
 
@@ -136,7 +137,8 @@ class RQEvaluator(Evaluator):
     def drop(self, key_prefix: str) -> None:
         """Give up a cancelled run's batches: each waiting `collect` of theirs, within
         `poll_seconds`, deletes its queued jobs, stops its started ones on their workers (RQ's
-        stop-job command: the work horse is killed) and raises `BatchDroppedError`."""
+        stop-job command: the forking worker kills its work horse; a `simple` worker has none
+        and finishes the job, its result unread) and raises `BatchDroppedError`."""
         with self._lock:
             self._dropped.add(key_prefix)
 
@@ -145,15 +147,20 @@ class RQEvaluator(Evaluator):
             dropped = any(key.startswith(prefix) for prefix in self._dropped)
         if not dropped:
             return
-        for n in range(1, attempts + 1):
-            with contextlib.suppress(NoSuchJobError, InvalidJobOperation, *REDIS_DOWN):
-                job = Job.fetch(f"softevo-{key}-a{n}", connection=self.connection,
-                                serializer=SERIALIZER)  # fmt: skip
+        for job in self._attempts(key, attempts):
+            with contextlib.suppress(InvalidJobOperation, *REDIS_DOWN):
                 if job.get_status(refresh=False) == JobStatus.STARTED:
                     send_stop_job_command(self.connection, job.id, serializer=SERIALIZER)
                 else:
                     job.delete()
         raise BatchDroppedError(f"batch {key} was dropped")
+
+    def _attempts(self, key: str, attempts: int) -> Iterator[Job]:
+        """The batch's jobs still on Redis, attempt 1 to `attempts` (none while it is away)."""
+        for n in range(1, attempts + 1):
+            with contextlib.suppress(NoSuchJobError, *REDIS_DOWN):
+                yield Job.fetch(f"softevo-{key}-a{n}", connection=self.connection,
+                                serializer=SERIALIZER)  # fmt: skip
 
     def close(self) -> None:
         self.connection.close()
@@ -253,14 +260,12 @@ class RQEvaluator(Evaluator):
         waste a worker, and one presumed lost (its worker killed) would otherwise sit in RQ's
         StartedJobRegistry until RQ's own clean-up, minutes later. A copy still running on a
         live worker finishes all the same; its late result is never read."""
-        for n in range(1, attempts + 1):
-            job_id = f"softevo-{key}-a{n}"
-            if job_id == winner:
+        for job in self._attempts(key, attempts):
+            if job.id == winner:
                 continue
             with contextlib.suppress(NoSuchJobError, *REDIS_DOWN):
-                job = Job.fetch(job_id, connection=self.connection, serializer=SERIALIZER)
                 status = job.get_status(refresh=False)
-                if status == JobStatus.QUEUED or (status == JobStatus.STARTED and job_id in late):
+                if status == JobStatus.QUEUED or (status == JobStatus.STARTED and job.id in late):
                     job.delete()
 
     def _check(self, job_id: str, files: list[dict[str, Any]]) -> str:

@@ -118,11 +118,11 @@ _SET_FITNESS = (
 @dataclass(frozen=True)
 class Landed:
     """One batch's fitness (by index in its generation; NaN = failed), the worker that
-    evaluated it and the seconds each of its robots took."""
+    evaluated it and the seconds each of its robots took (None for fitness from the cache)."""
 
     fitness: dict[int, float]
-    worker: str
-    seconds_each: float
+    worker: str | None
+    seconds_each: float | None
 
 
 @dataclass(frozen=True)
@@ -144,26 +144,19 @@ class GenerationCommit:
     upcoming: Sequence[dict[str, Any]] = ()
 
 
-def _fitness_rows(run_id: int, generation: int, landed: Sequence[Landed]) -> list[dict[str, Any]]:
+def _fitness_rows(
+    run_id: int, generation: int, landed: Sequence[Landed], status: IndividualStatus | None = None
+) -> list[dict[str, Any]]:
+    """Rows for `_SET_FITNESS`: evaluated or failed by the value, unless `status` is given."""
     at = now()
     return [
         {"b_run": run_id, "b_generation": generation, "b_index": index,
          "b_fitness": to_null(value), "b_seconds": batch.seconds_each,
-         "b_worker": batch.worker[:128], "b_at": at,
-         "b_status": (IndividualStatus.EVALUATED if to_null(value) is not None
-                      else IndividualStatus.FAILED).value}
+         "b_worker": None if batch.worker is None else batch.worker[:128], "b_at": at,
+         "b_status": (status or (IndividualStatus.EVALUATED if to_null(value) is not None
+                                 else IndividualStatus.FAILED)).value}
         for batch in landed
         for index, value in batch.fitness.items()
-    ]  # fmt: skip
-
-
-def _cached_rows(run_id: int, generation: int, cached: dict[int, float]) -> list[dict[str, Any]]:
-    at = now()
-    return [
-        {"b_run": run_id, "b_generation": generation, "b_index": index,
-         "b_fitness": to_null(value), "b_seconds": None, "b_worker": None, "b_at": at,
-         "b_status": IndividualStatus.CACHED.value}
-        for index, value in cached.items()
     ]  # fmt: skip
 
 
@@ -223,7 +216,8 @@ def commit_generation(db: Database, run_id: int, lease: Lease, commit: Generatio
         _fence(session, run_id, lease)
         connection = session.connection()
         rows = _fitness_rows(run_id, generation, commit.landed)
-        rows += _cached_rows(run_id, generation, commit.cached)
+        cached = [Landed(commit.cached, None, None)]
+        rows += _fitness_rows(run_id, generation, cached, IndividualStatus.CACHED)
         if rows:
             connection.execute(_SET_FITNESS, rows)
         connection.execute(

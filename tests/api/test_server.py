@@ -142,7 +142,15 @@ def test_an_idle_keep_alive_connection_is_closed_and_a_busy_one_kept(
 
 
 @pytest.mark.parametrize("name", ["SOFTEVO_HEADER_SECONDS", "SOFTEVO_KEEP_ALIVE_SECONDS"])
-def test_a_deadline_must_be_positive(name: str) -> None:
-    with pytest.raises(ValueError, match=name):
-        Settings.from_env({name: "0"})
+def test_a_deadline_must_be_a_positive_number(name: str) -> None:
+    for bad in ("0", "-1", "nan", "inf"):
+        with pytest.raises(ValueError, match=name):
+            Settings.from_env({name: bad})
     assert Settings.from_env({name: "2.5"}) != Settings()
+
+
+def test_the_save_interval_must_be_a_number_not_below_zero() -> None:
+    for bad in ("-0.5", "nan", "inf"):
+        with pytest.raises(ValueError, match="SOFTEVO_SAVE_SECONDS"):
+            Settings.from_env({"SOFTEVO_SAVE_SECONDS": bad})
+    assert Settings.from_env({"SOFTEVO_SAVE_SECONDS": "0"}).save_seconds == 0
