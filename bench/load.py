@@ -1,7 +1,8 @@
 """The service under hostile load: `python bench/load.py [--seconds S] [--database D,...]`.
 
 A real `softevo serve` (the in-process pool on every core) while, all at once:
-* a large run evaluates (8x8x8 paper-voxel, population 100: every core busy simulating),
+* a run at nearly the largest accepted cost evaluates (8x8x8 paper-voxel, population 670 x 100
+  generations, 9.98e12 of the 1e13 spring-steps a run may cost: every core busy simulating),
 * 200 clients follow that run's server-sent events,
 * 20 clients ask for replays of distinct individuals at distinct frame rates, again and again,
 * a probe times `GET /healthz` and `GET /runs/{id}/curve`, ten times a second each.
@@ -34,7 +35,8 @@ import httpx
 from softevo.local_service import LocalService, service_env, start_service
 
 POSTGRES = os.environ.get("SOFTEVO_TEST_POSTGRES", "postgresql://postgres@127.0.0.1:5432/test")
-LARGE = {"preset": "paper-voxel", "shape": [8, 8, 8], "population": 100, "generations": 100,
+# near the default budget (SOFTEVO_MAX_SPRING_STEPS 1e13): 9.98e12 spring-steps, 670 x 100
+LARGE = {"preset": "paper-voxel", "shape": [8, 8, 8], "population": 670, "generations": 100,
          "seed": 1}  # fmt: skip
 SSE_CLIENTS, REPLAY_CLIENTS = 200, 20
 
@@ -74,14 +76,14 @@ async def replays(client: httpx.AsyncClient, run_id: int, k: int, stop: asyncio.
                   answers: Counter[int]) -> None:  # fmt: skip
     fps = (1, 2, 5, 10, 15, 20, 30, 60, 120)[k % 9]
     n = k
-    while not stop.is_set():  # individuals of the first generation (the population is 100)
+    while not stop.is_set():  # the first 100 individuals of the first generation
         try:
             response = await client.get(f"/runs/{run_id}/individuals/{n}/replay",
                                         params={"fps": fps}, timeout=120)  # fmt: skip
             answers[response.status_code] += 1
         except httpx.HTTPError:
             answers[0] += 1
-        n = (n + REPLAY_CLIENTS) % LARGE["population"]
+        n = (n + REPLAY_CLIENTS) % 100
         await asyncio.sleep(0.2)
 
 
