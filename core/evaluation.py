@@ -121,7 +121,7 @@ class PoolEvaluator(Evaluator):
         self.processes = processes or os.cpu_count() or 1
         if self.processes < 1:
             raise ValueError(f"processes must be >= 1, got {self.processes}")
-        self._changed = threading.Condition()  # guards everything below
+        self._lock = threading.RLock()  # guards everything below (a callback may run inside)
         self._queue = batching.Queue(lanes)
         self._pool = self._new_pool()
         self._tasks: dict[Future[list[float | None]], list[batching.Request]] = {}
@@ -129,7 +129,6 @@ class PoolEvaluator(Evaluator):
         self._replaced: weakref.WeakSet[ProcessPoolExecutor] = weakref.WeakSet()  # by `drop`
         self._closed = False
         self.tasks = 0  # kernel calls handed to the processes so far (batches merged or not)
-        threading.Thread(target=self._dispatch, name="pool-dispatch", daemon=True).start()
 
     def _new_pool(self) -> ProcessPoolExecutor:
         return ProcessPoolExecutor(
@@ -145,41 +144,39 @@ class PoolEvaluator(Evaluator):
         request = batching.Request(list(robot_files), key or "")
         if not request.files:
             return BatchResult(np.empty(0), f"PoolEvaluator@{socket.gethostname()}", 0.0)
-        with self._changed:
+        with self._lock:
             self._refuse_dropped(request.key)
             self._queue.put(request)
-            self._changed.notify_all()
+            self._fill()
         return _timed("PoolEvaluator", lambda: from_nulls(request.future.result()))
 
-    def _dispatch(self) -> None:
-        """Hands the queue's tasks to the pool, one a process, as processes come free."""
-        with self._changed:
-            while not self._closed:
-                while self._queue and len(self._tasks) < self.processes:
-                    task = self._queue.take()
-                    pool = self._pool
-                    try:
-                        future = pool.submit(evaluate_robot_files, batching.task_files(task))
-                    except BrokenProcessPool:
-                        self._failed(task, pool)
-                        continue
-                    except Exception as error:  # never leave a caller waiting
-                        for request in task:
-                            request.future.set_exception(error)
-                        continue
-                    self._tasks[future] = task
-                    self.tasks += 1
-                    future.add_done_callback(lambda done, pool=pool: self._landed(done, pool))
-                self._changed.wait()
+    def _fill(self) -> None:
+        """Hand the queue's tasks to the pool while a process is free (under the lock; called
+        by a caller that queued a batch and by every task that lands: no thread in between)."""
+        while self._queue and len(self._tasks) < self.processes and not self._closed:
+            task = self._queue.take()
+            pool = self._pool
+            try:
+                future = pool.submit(evaluate_robot_files, batching.task_files(task))
+            except BrokenProcessPool:
+                self._failed(task, pool)
+                continue
+            except Exception as error:  # never leave a caller waiting
+                for request in task:
+                    request.future.set_exception(error)
+                continue
+            self._tasks[future] = task
+            self.tasks += 1
+            future.add_done_callback(lambda done, pool=pool: self._landed(done, pool))
 
     def _landed(self, future: Future[list[float | None]], pool: ProcessPoolExecutor) -> None:
-        with self._changed:
+        with self._lock:
             task = self._tasks.pop(future)
             if future.cancelled() or future.exception() is not None:
                 self._failed(task, pool)
             else:
                 batching.split_results(task, future.result())
-            self._changed.notify_all()
+            self._fill()
 
     def _failed(self, task: list[batching.Request], pool: ProcessPoolExecutor) -> None:
         """A task whose process died: each batch again, alone (uncounted after a drop)."""
@@ -208,7 +205,7 @@ class PoolEvaluator(Evaluator):
             raise BatchDroppedError(f"batch {key} was dropped")
 
     def drop(self, key_prefix: str) -> None:
-        with self._changed:
+        with self._lock:
             self._dropped.add(key_prefix)
             dropped = BatchDroppedError(f"the batches of {key_prefix}* were dropped")
             for request in self._queue.remove(key_prefix):
@@ -233,11 +230,10 @@ class PoolEvaluator(Evaluator):
         return self.processes
 
     def close(self) -> None:
-        with self._changed:
+        with self._lock:
             self._closed = True
             for request in self._queue.remove(""):
                 request.future.set_exception(RuntimeError("the pool was closed"))
-            self._changed.notify_all()
             pool = self._pool
         pool.shutdown(wait=True, cancel_futures=True)
 
