@@ -15,7 +15,9 @@ wall (1.0: nothing but simulation). Paths:
 
 Workloads: `paper-voxel` (4x4x4, seed 1, 25 x G generations, 100 by default), `sweep` (the
 paper's nine boxes x seeds 1-3 as one `POST /sweeps`, G generations each; `run` path: the 27 runs
-one after another), `paper-cube` (the 28-spring cube, 30 x G, 1000 by default). Every path warms
+one after another), `paper-cube` (the 28-spring cube, 30 x G, 1000 by default), `seeds` (one
+box, 4x4x4, seeds 1-6 as one sweep, G generations, 40 by default: runs whose robots can share
+kernel calls when several are driven at once). Every path warms
 its kernels first (a small untimed run), and the bound is measured after the path, in the same
 invocation. `--widths` prints only the kernel's per-robot cost against the number of robots
 in one call (1, 2, 3, 5, 8). `--max-running N` sets the service's SOFTEVO_MAX_RUNNING (runs
@@ -27,6 +29,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import math
 import os
 import platform
 import sqlite3
@@ -60,6 +63,16 @@ def workload(name: str, generations: int | None) -> list[dict[str, Any]]:
         return [{"preset": "paper-voxel", "seed": 1, "generations": generations or 100}]
     if name == "paper-cube":
         return [{"preset": "paper-cube", "seed": 1, "generations": generations or 1000}]
+    if name == "seeds":
+        return [
+            {
+                "preset": "paper-voxel",
+                "seed": seed,
+                "shape": [4, 4, 4],
+                "generations": generations or 40,
+            }
+            for seed in range(1, 7)
+        ]
     return [
         {"preset": "paper-voxel", "seed": seed, "shape": box, "generations": generations or 100}
         for box in BOXES
@@ -153,10 +166,10 @@ def through_service(
         wait_completed(client, [warm])
         started = time.perf_counter()
         if sweep:
-            base = {
-                key: value for key, value in requests[0].items() if key not in ("shape", "seed")
-            }
-            body = {**base, "shapes": BOXES, "seeds": list(SEEDS)}
+            base = {k: v for k, v in requests[0].items() if k not in ("shape", "seed")}
+            shapes = list({tuple(r["shape"]): None for r in requests})
+            seeds = list({r["seed"]: None for r in requests})
+            body = {**base, "shapes": [list(shape) for shape in shapes], "seeds": seeds}
             created = client.post("/sweeps", json=body)
             created.raise_for_status()
             run_ids = [run_id for box in created.json()["boxes"] for run_id in box["run_ids"]]
@@ -202,6 +215,9 @@ def main() -> None:
     parser.add_argument("--generations", type=int, help="generations of every run")
     parser.add_argument("--max-running", type=int, help="the service's SOFTEVO_MAX_RUNNING")
     parser.add_argument(
+        "--no-bound", action="store_true", help="wall times only (to compare two trees)"
+    )
+    parser.add_argument(
         "--widths", action="store_true", help="only the kernel's per-robot cost by call width"
     )
     args = parser.parse_args()
@@ -219,10 +235,10 @@ def main() -> None:
                     wall, files = through_run(requests)
                 else:
                     wall, files = through_service(
-                        requests, name == "sweep", path == "service-rq", Path(folder),
+                        requests, name in ("sweep", "seeds"), path == "service-rq", Path(folder),
                         args.max_running,
                     )  # fmt: skip
-            physics = bound(files)
+            physics = math.nan if args.no_bound else bound(files)
             print(f"{name:12} {path:12} {len(files):11d} {wall:11.1f} {physics:11.1f} "
                   f"{physics / wall:12.2f}", flush=True)  # fmt: skip
 

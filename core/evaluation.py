@@ -19,17 +19,15 @@ import threading
 import time
 import weakref
 from collections.abc import Callable, Sequence
-from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures import CancelledError, Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
 import numpy as np
 
-from softevo.core import batching
 from softevo.core.evaluator import BatchDroppedError, BatchResult, Evaluator
 from softevo.core.nulls import from_nulls, to_null
 from softevo.core.physics import simulate, simulate_batch
-from softevo.core.physics.simulate import DEFAULT_LANES
 from softevo.core.robot import Robot, VoxelRobot
 from softevo.core.robot_file import RobotFileError, parse_robot
 from softevo.core.settings import sim_settings
@@ -105,30 +103,24 @@ def start_pool_process() -> None:
 
 
 class PoolEvaluator(Evaluator):
-    """A local pool of worker processes (default: one per core), each warmed up once, fed by
-    one queue of every caller's batches (`softevo.core.batching`): at most one task a process
-    at a time, a task being whole batches of one kind up to the kernel's SIMD width, so the
-    batches of several runs that wait for a busy pool leave together in fuller kernel calls.
+    """A local pool of worker processes (default: one per core), each warmed up once. A batch
+    runs in one process, across the kernel's SIMD lanes; the generation step cuts a generation
+    into at least `capacity()` batches and keeps them in flight together, one per process.
 
-    If a process dies (killed, out of memory), the pool is rebuilt and each batch of the task
-    tried once more, alone; a batch that kills its process twice raises. `drop(prefix)` (a
-    cancelled run) answers the run's batches at once: waiting ones leave the queue, and if one
-    runs in a task of its own, the pool's processes are replaced (a simulation cannot be
-    interrupted inside the kernel); other runs' batches that were in them run again on the new
-    ones, uncounted, with the same result."""
+    `drop(prefix)` (a cancelled run) cancels the run's batches not yet handed to a process and,
+    if one of them runs or waits in the pool's call queue, replaces the pool: its processes are
+    killed (a simulation cannot be interrupted inside the kernel) and other runs' batches that
+    were in it run again on the new one, uncounted, with the same result."""
 
-    def __init__(self, processes: int | None = None, lanes: int = DEFAULT_LANES) -> None:
+    def __init__(self, processes: int | None = None) -> None:
         self.processes = processes or os.cpu_count() or 1
         if self.processes < 1:
             raise ValueError(f"processes must be >= 1, got {self.processes}")
-        self._lock = threading.RLock()  # guards everything below (a callback may run inside)
-        self._queue = batching.Queue(lanes)
+        self._lock = threading.Lock()
         self._pool = self._new_pool()
-        self._tasks: dict[Future[list[float | None]], list[batching.Request]] = {}
+        self._batches: dict[Future[list[float | None]], str] = {}  # in the pool: key each
         self._dropped: set[str] = set()  # key prefixes given up
         self._replaced: weakref.WeakSet[ProcessPoolExecutor] = weakref.WeakSet()  # by `drop`
-        self._closed = False
-        self.tasks = 0  # kernel calls handed to the processes so far (batches merged or not)
 
     def _new_pool(self) -> ProcessPoolExecutor:
         return ProcessPoolExecutor(
@@ -140,65 +132,39 @@ class PoolEvaluator(Evaluator):
     def evaluate_batch(
         self, robot_files: Sequence[dict[str, Any]], key: str | None = None
     ) -> BatchResult:
-        """Thread-safe: any number of callers; their batches share the pool's tasks."""
-        request = batching.Request(list(robot_files), key or "")
-        if not request.files:
-            return BatchResult(np.empty(0), f"PoolEvaluator@{socket.gethostname()}", 0.0)
-        with self._lock:
-            self._refuse_dropped(request.key)
-            self._queue.put(request)
-            self._fill()
-        return _timed("PoolEvaluator", lambda: from_nulls(request.future.result()))
+        """Thread-safe. If a pool process dies (killed, out of memory), the pool is rebuilt and
+        the batch tried once more; a batch that kills its process twice raises."""
+        files = list(robot_files)
+        return _timed("PoolEvaluator", lambda: self._run(files, key or ""))
 
-    def _fill(self) -> None:
-        """Hand the queue's tasks to the pool while a process is free (under the lock; called
-        by a caller that queued a batch and by every task that lands: no thread in between)."""
-        while self._queue and len(self._tasks) < self.processes and not self._closed:
-            task = self._queue.take()
-            pool = self._pool
+    def _run(self, files: list[dict[str, Any]], key: str) -> np.ndarray:
+        if not files:
+            return np.empty(0)
+        attempt = 1
+        while True:
+            with self._lock:
+                self._refuse_dropped(key)
+                pool = self._pool
+            future: Future[list[float | None]] | None = None
             try:
-                future = pool.submit(evaluate_robot_files, batching.task_files(task))
-            except BrokenProcessPool:
-                self._failed(task, pool)
-                continue
-            except Exception as error:  # never leave a caller waiting
-                for request in task:
-                    request.future.set_exception(error)
-                continue
-            self._tasks[future] = task
-            self.tasks += 1
-            future.add_done_callback(lambda done, pool=pool: self._landed(done, pool))
-
-    def _landed(self, future: Future[list[float | None]], pool: ProcessPoolExecutor) -> None:
-        with self._lock:
-            task = self._tasks.pop(future)
-            if future.cancelled() or future.exception() is not None:
-                self._failed(task, pool)
-            else:
-                batching.split_results(task, future.result())
-            self._fill()
-
-    def _failed(self, task: list[batching.Request], pool: ProcessPoolExecutor) -> None:
-        """A task whose process died: each batch again, alone (uncounted after a drop)."""
-        if self._closed:
-            for request in task:
-                if not request.future.done():
-                    request.future.set_exception(RuntimeError("the pool was closed"))
-            return
-        replaced = pool in self._replaced
-        if not replaced and self._pool is pool:  # the first to notice rebuilds it
-            pool.shutdown(wait=False, cancel_futures=True)
-            self._pool = self._new_pool()
-        for request in task:
-            if request.future.done():
-                continue
-            if not replaced and request.attempt == 2:
-                request.future.set_exception(BrokenProcessPool(f"batch {request.key} killed "
-                                                               "its process twice"))  # fmt: skip
-                continue
-            request.attempt += 0 if replaced else 1
-            request.alone = True
-            self._queue.put(request, first=True)
+                with self._lock:
+                    future = pool.submit(evaluate_robot_files, files)
+                    self._batches[future] = key
+                return from_nulls(future.result())
+            except (BrokenProcessPool, CancelledError):
+                with self._lock:
+                    self._refuse_dropped(key)
+                    if pool in self._replaced:  # another run's cancel: not this batch's
+                        continue
+                    if attempt == 2:
+                        raise
+                    attempt += 1
+                    if self._pool is pool:  # the first thread to notice rebuilds it
+                        pool.shutdown(wait=False, cancel_futures=True)
+                        self._pool = self._new_pool()
+            finally:
+                with self._lock:
+                    self._batches.pop(future, None)  # type: ignore[arg-type]
 
     def _refuse_dropped(self, key: str) -> None:
         if key and any(key.startswith(prefix) for prefix in self._dropped):
@@ -207,17 +173,9 @@ class PoolEvaluator(Evaluator):
     def drop(self, key_prefix: str) -> None:
         with self._lock:
             self._dropped.add(key_prefix)
-            dropped = BatchDroppedError(f"the batches of {key_prefix}* were dropped")
-            for request in self._queue.remove(key_prefix):
-                request.future.set_exception(dropped)
-            only_theirs = False
-            for task in self._tasks.values():
-                mine = [r for r in task if r.key.startswith(key_prefix)]
-                for request in mine:
-                    if not request.future.done():
-                        request.future.set_exception(dropped)
-                only_theirs |= bool(mine) and len(mine) == len(task)
-            if not only_theirs:  # a task shared with other runs finishes for them
+            mine = [future for future, key in self._batches.items() if key.startswith(key_prefix)]
+            running = [future for future in mine if not future.cancel()]
+            if not running:
                 return
             old, self._pool = self._pool, self._new_pool()
             self._replaced.add(old)
@@ -230,12 +188,7 @@ class PoolEvaluator(Evaluator):
         return self.processes
 
     def close(self) -> None:
-        with self._lock:
-            self._closed = True
-            for request in self._queue.remove(""):
-                request.future.set_exception(RuntimeError("the pool was closed"))
-            pool = self._pool
-        pool.shutdown(wait=True, cancel_futures=True)
+        self._pool.shutdown(wait=True, cancel_futures=True)
 
 
 def make_evaluator(processes: int | None = None) -> Evaluator:
