@@ -255,9 +255,8 @@ def test_a_database_that_turns_read_only_is_said_and_the_run_goes_on_after(
     """PostgreSQL made read-only under a running `softevo serve`: `/healthz` (with the token)
     and the run say why nothing moves, the log says it a few times, not twice a second with
     tracebacks; writable again, the run completes with the undisturbed curve."""
-    import httpx
-
-    from softevo.local_service import service_env, start_service
+    from softevo.local_service import service_env
+    from tests.api.said import said_and_survived
 
     admin = create_engine(
         database.replace("postgresql://", "postgresql+psycopg://", 1), isolation_level="AUTOCOMMIT"
@@ -276,40 +275,6 @@ def test_a_database_that_turns_read_only_is_said_and_the_run_goes_on_after(
 
     env = service_env(database_url=database, api_token="t", workers="1", poll_seconds="0.2",
                       lease_seconds=str(LEASE_SECONDS))  # fmt: skip
-    auth = {"Authorization": "Bearer t"}
-    with (
-        start_service(env, tmp_path / "serve.log") as local,
-        httpx.Client(base_url=local.url, timeout=30) as client,
-    ):
-        run_id = client.post("/runs", json=REQUEST, headers=auth).json()["id"]
-        deadline = time.monotonic() + 60
-        while client.get(f"/runs/{run_id}").json()["progress"]["generation"] < 1:
-            assert time.monotonic() < deadline
-            time.sleep(0.1)
-        read_only(True)
-        said_at = time.monotonic()
-        while True:
-            health = client.get("/healthz", headers=auth)
-            if health.status_code == 503 and "read-only" in health.json()["database"]:
-                break
-            assert time.monotonic() - said_at < 30, health.text
-            time.sleep(0.2)
-        took = time.monotonic() - said_at
-        print(f"[ro] /healthz said {health.json()['database']!r} {took:.2f} s after the "
-              "database turned read-only")  # fmt: skip
-        assert client.get("/healthz").json()["database"] == "cannot write"  # no reason to anyone
-        problem = client.get(f"/runs/{run_id}").json()["problem"]
-        assert problem and "read-only" in problem, problem
-        time.sleep(3.0)  # a few seconds of the fault: what the log says of them
-        said = local.tail(200_000).count("cannot write to the database")
-        assert 1 <= said <= 4, local.tail()
-        read_only(False)
-        run = client.get(f"/runs/{run_id}").json()
-        deadline = time.monotonic() + 120
-        while run["status"] != "completed":
-            assert time.monotonic() < deadline and run["status"] == "running", run
-            time.sleep(0.2)
-            run = client.get(f"/runs/{run_id}").json()
-        assert client.get(f"/runs/{run_id}/curve").json()["generations"] == undisturbed
-        assert client.get("/healthz").json()["status"] == "ok" and run["problem"] is None
+    said_and_survived(env, tmp_path / "serve.log", REQUEST, undisturbed, "read-only",
+                      lambda: read_only(True), lambda: read_only(False))  # fmt: skip
     admin.dispose()

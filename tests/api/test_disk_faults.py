@@ -9,18 +9,17 @@ from __future__ import annotations
 import errno
 import os
 import subprocess
-import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-import httpx
 import pytest
 
 from softevo.core.config import resolve
 from softevo.core.evaluation import SerialEvaluator
 from softevo.core.evolution import Evolution
-from softevo.local_service import service_env, start_service
+from softevo.local_service import service_env
+from tests.api.said import said_and_survived
 
 pytestmark = [pytest.mark.slow, pytest.mark.fault]
 
@@ -77,46 +76,8 @@ def test_a_full_disk_is_said_and_the_run_goes_on_after(small_disk: Path, tmp_pat
         database_url=f"sqlite:///{small_disk / 'softevo.db'}", api_token="t", workers="1",
         poll_seconds="0.2", lease_seconds="2",
     )  # fmt: skip
-    auth = {"Authorization": "Bearer t"}
-    with (
-        start_service(env, tmp_path / "serve.log") as local,
-        httpx.Client(base_url=local.url, timeout=30) as client,
-    ):
-        run_id = client.post("/runs", json=REQUEST, headers=auth).json()["id"]
-        deadline = time.monotonic() + 60
-        while client.get(f"/runs/{run_id}").json()["progress"]["generation"] < 2:
-            assert time.monotonic() < deadline
-            time.sleep(0.1)
-        filler = fill(small_disk)
-        full_at = time.monotonic()
-        while True:
-            health = client.get("/healthz", headers=auth)
-            if health.status_code == 503 and "full" in health.json()["database"]:
-                break
-            run = client.get(f"/runs/{run_id}").json()
-            assert run["status"] == "running", f"the run ended {run['status']} on a full disk"
-            assert time.monotonic() - full_at < 60, health.text
-            time.sleep(0.2)
-        took = time.monotonic() - full_at
-        stalled_at = client.get(f"/runs/{run_id}").json()["progress"]["generation"]
-        print(f"[disk] /healthz said {health.json()['database']!r} {took:.2f} s after the disk "
-              f"filled (at generation {stalled_at})")  # fmt: skip
-        assert client.get("/healthz").json()["database"] == "cannot write"  # no reason to anyone
-        problem = client.get(f"/runs/{run_id}").json()["problem"]
-        assert problem and "full" in problem, problem
-        time.sleep(3.0)  # a few seconds of the fault: what the log says of them
-        said = local.tail(200_000).count("cannot write to the database")
-        assert 1 <= said <= 4, local.tail()
-        filler.unlink()
-        freed_at = time.monotonic()
-        run = client.get(f"/runs/{run_id}").json()
-        while run["status"] != "completed":
-            assert time.monotonic() - freed_at < 120 and run["status"] == "running", run
-            time.sleep(0.2)
-            run = client.get(f"/runs/{run_id}").json()
-        print(f"[disk] space back: the run completed {time.monotonic() - freed_at:.2f} s after")
-        assert client.get(f"/runs/{run_id}/curve").json()["generations"] == undisturbed
-        assert client.get("/healthz").json()["status"] == "ok" and run["problem"] is None
-        items = client.get(f"/runs/{run_id}/individuals", params={"limit": 1000}).json()
-        assert items["total"] == REQUEST["population"] * REQUEST["generations"]
-        assert all(item["status"] != "pending" for item in items["items"])
+    filler: list[Path] = []
+    said_and_survived(
+        env, tmp_path / "serve.log", REQUEST, undisturbed, "full",
+        lambda: filler.append(fill(small_disk)), lambda: filler.pop().unlink(), after=2,
+    )  # fmt: skip
