@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from softevo.core.evaluator import BatchDroppedError, BatchResult, Evaluator
+from softevo.core.evaluator import BatchResult, Evaluator, refuse_dropped
 from softevo.core.nulls import from_nulls, to_null
 from softevo.core.physics import simulate, simulate_batch
 from softevo.core.robot import Robot, VoxelRobot
@@ -143,7 +143,7 @@ class PoolEvaluator(Evaluator):
         attempt = 1
         while True:
             with self._lock:
-                self._refuse_dropped(key)
+                refuse_dropped(key, self._dropped)
                 pool = self._pool
             future: Future[list[float | None]] | None = None
             try:
@@ -153,7 +153,7 @@ class PoolEvaluator(Evaluator):
                 return from_nulls(future.result())
             except (BrokenProcessPool, CancelledError):
                 with self._lock:
-                    self._refuse_dropped(key)
+                    refuse_dropped(key, self._dropped)
                     if pool in self._replaced:  # another run's cancel: not this batch's
                         continue
                     if attempt == 2:
@@ -165,10 +165,6 @@ class PoolEvaluator(Evaluator):
             finally:
                 with self._lock:
                     self._batches.pop(future, None)  # type: ignore[arg-type]
-
-    def _refuse_dropped(self, key: str) -> None:
-        if key and any(key.startswith(prefix) for prefix in self._dropped):
-            raise BatchDroppedError(f"batch {key} was dropped")
 
     def drop(self, key_prefix: str) -> None:
         with self._lock:

@@ -37,6 +37,12 @@ class BatchDroppedError(RuntimeError):
     """The batch was given up (`Evaluator.drop`, a cancelled run): no fitness, nobody waits."""
 
 
+def refuse_dropped(key: str, prefixes: set[str]) -> None:
+    """Raise `BatchDroppedError` if batch `key` starts with a prefix given to `drop`."""
+    if key and any(key.startswith(prefix) for prefix in prefixes):
+        raise BatchDroppedError(f"batch {key} was dropped")
+
+
 class Evaluator(ABC):
     """Simulates batches of robots. Thread-safe: the generation step keeps several batches in
     flight at once (one thread each), and `capacity()` says how many of them run at the same

@@ -35,7 +35,13 @@ from rq.command import send_stop_job_command
 from rq.exceptions import InvalidJobOperation, NoSuchJobError
 from rq.job import Job, JobStatus
 
-from softevo.core.evaluator import BatchDroppedError, BatchResult, Evaluator, batch_digest
+from softevo.core.evaluator import (
+    BatchDroppedError,
+    BatchResult,
+    Evaluator,
+    batch_digest,
+    refuse_dropped,
+)
 from softevo.core.nulls import from_nulls
 from softevo.worker.queue import (
     JOB_FUNCTION,
@@ -144,23 +150,27 @@ class RQEvaluator(Evaluator):
 
     def _give_up_if_dropped(self, key: str, attempts: int) -> None:
         with self._lock:
-            dropped = any(key.startswith(prefix) for prefix in self._dropped)
-        if not dropped:
-            return
-        for job in self._attempts(key, attempts):
-            with contextlib.suppress(InvalidJobOperation, *REDIS_DOWN):
-                if job.get_status(refresh=False) == JobStatus.STARTED:
-                    send_stop_job_command(self.connection, job.id, serializer=SERIALIZER)
-                else:
-                    job.delete()
-        raise BatchDroppedError(f"batch {key} was dropped")
+            prefixes = set(self._dropped)
+        try:
+            refuse_dropped(key, prefixes)
+        except BatchDroppedError:
+            for job in self._attempts(key, attempts):
+                with contextlib.suppress(InvalidJobOperation, *REDIS_DOWN):
+                    if job.get_status(refresh=False) == JobStatus.STARTED:
+                        send_stop_job_command(self.connection, job.id, serializer=SERIALIZER)
+                    else:
+                        job.delete()
+            raise
 
     def _attempts(self, key: str, attempts: int) -> Iterator[Job]:
         """The batch's jobs still on Redis, attempt 1 to `attempts` (none while it is away)."""
         for n in range(1, attempts + 1):
-            with contextlib.suppress(NoSuchJobError, *REDIS_DOWN):
-                yield Job.fetch(f"softevo-{key}-a{n}", connection=self.connection,
+            try:
+                job = Job.fetch(f"softevo-{key}-a{n}", connection=self.connection,
                                 serializer=SERIALIZER)  # fmt: skip
+            except (NoSuchJobError, *REDIS_DOWN):
+                continue
+            yield job
 
     def close(self) -> None:
         self.connection.close()

@@ -101,16 +101,20 @@ class FreezingEvaluator(SerialEvaluator):
             self.release.wait(60)
         return super().evaluate_batch(robot_files, key)
 
+    def wait_frozen(self, timeout: float = 60) -> None:
+        """Until its `calls` batches are done and the next one hangs."""
+        deadline = time.monotonic() + timeout
+        while self.calls >= 0:
+            assert time.monotonic() < deadline, "the evaluator never froze"
+            time.sleep(0.02)
+
 
 def test_takeover_after_a_coordinator_freezes_gives_the_undisturbed_curve(db: Database) -> None:
     run = store.create_run(db, resolve(REQUEST))
     frozen = FreezingEvaluator(calls=5)
     first = Coordinator(db, frozen, batch_size=2, lease_seconds=1.0, poll_seconds=0.05)
     first.start()
-    deadline = time.monotonic() + 60
-    while frozen.calls >= 0:
-        assert time.monotonic() < deadline
-        time.sleep(0.02)
+    frozen.wait_frozen()
     first.stopping.set()  # the frozen coordinator stops heartbeating, as if SIGSTOPped
     second = Coordinator(db, SerialEvaluator(), batch_size=2, lease_seconds=1.0, poll_seconds=0.05)
     second.start()
@@ -214,10 +218,7 @@ def test_fitness_waiting_for_its_write_is_saved_at_a_shutdown(db: Database) -> N
     frozen = FreezingEvaluator(calls=3)
     first = Coordinator(db, frozen, batch_size=2, save_seconds=60.0, poll_seconds=0.05)
     first.start()
-    deadline = time.monotonic() + 60
-    while frozen.calls >= 0:
-        assert time.monotonic() < deadline
-        time.sleep(0.02)
+    frozen.wait_frozen()
     first.stop()
     frozen.release.set()
     with db.read() as session:
@@ -259,10 +260,7 @@ def test_a_cancel_drops_the_runs_batches_still_out(db: Database, where: str) -> 
     coordinator = Coordinator(db, evaluator, batch_size=2, lease_seconds=0.6, poll_seconds=0.05)
     coordinator.start()
     try:
-        deadline = time.monotonic() + 60
-        while evaluator.calls >= 0:
-            assert time.monotonic() < deadline
-            time.sleep(0.02)
+        evaluator.wait_frozen()
         store.cancel_run(db, run.id)
         if where == "this coordinator":
             coordinator.cancel(run.id)
