@@ -40,6 +40,7 @@ from softevo.api.settings import Settings
 from softevo.core.config import resolve
 from softevo.core.evaluation import SerialEvaluator
 from softevo.core.evolution import CURVE_COLUMNS, Evolution
+from softevo.core.limits import SAVE_SECONDS
 from softevo.core.robot_file import robot_to_json
 from softevo.worker.evaluator import RQEvaluator
 from softevo.worker.queue import QUEUE, SERIALIZER, result_key
@@ -385,6 +386,9 @@ def test_only_worker_killed_then_a_new_one_started_later(
     service.wait_for_fitness(run_id)
     caught = kill_mid_job(service.redis, workers, {"b1"})
     killed = time.monotonic()
+    # fitness that landed just before the kill may wait SAVE_SECONDS for its write (and the
+    # driver's next 0.2 s check): what is saved once that has passed must then stay as it is
+    time.sleep(SAVE_SECONDS + 0.5)
     before = service.run(run_id)["progress"]
     saved = [i for i in service.individuals(run_id) if i["status"] != "pending"]
     # No worker for NO_WORKER_SECONDS: the run waits, running, and nothing moves. The lost job
