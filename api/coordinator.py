@@ -175,7 +175,9 @@ class RunDriver(Hooks):
         stored_config, stored_state = store.driving.load(self.db, self.run_id)
         config = RunConfig.model_validate(stored_config)
         algorithm = GeneticAlgorithm(config.ga_config(), config.make_encoding())
-        engine = Engine(algorithm, config.sim, self.driving.batch_size, self.driving.in_flight)
+        engine = Engine(
+            algorithm, config.sim, self.driving.batch_size, self.driving.in_flight, config.objective
+        )
         state = GAState.from_json(stored_state) if stored_state else algorithm.start(config.seed)
         cache = store.driving.known_fitness(self.db, self.run_id, state.generation)
         while not algorithm.done(state):

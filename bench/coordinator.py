@@ -66,8 +66,8 @@ def instant_evaluator(found: dict[str, Any], sim_seconds: float = 0.0) -> Any:
         def evaluate(self, files: list[dict]) -> np.ndarray:
             if sim_seconds:
                 time.sleep(sim_seconds * len(files))
-            return np.array([
-                sum(v in ("sine", "neg_sine") for v in f["voxels"]) / len(f["voxels"])
+            return np.array([  # list.count: the stand-in's own CPU stays out of the figure
+                (f["voxels"].count("sine") + f["voxels"].count("neg_sine")) / len(f["voxels"])
                 for f in files
             ])  # fmt: skip
 

@@ -16,6 +16,7 @@ from pydantic import Field, ValidationError, field_validator, model_validator
 from softevo.core.encodings import PAPER_CUBE_OPTIONS, Encoding, make_encoding
 from softevo.core.ga.algorithm import GAConfig
 from softevo.core.limits import MAX_SIDE, MAX_VOXELS
+from softevo.core.objectives import Objective
 from softevo.core.settings import SimSettings, format_validation_error
 
 CubeOption = tuple[float, float, float, float]
@@ -38,6 +39,9 @@ class RunConfig(GAConfig):
     shape: tuple[int, int, int] = (4, 4, 4)
     seed: int = Field(0, ge=0, le=2**63 - 1)
     sim: SimSettings = Field(default_factory=SimSettings)
+    objective: Objective = Field(
+        "speed", description="the measure that is fitness (softevo.core.objectives)"
+    )
     cube_options: tuple[CubeOption, ...] = PAPER_CUBE_OPTIONS
 
     @field_validator("shape", mode="before")

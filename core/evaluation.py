@@ -27,23 +27,28 @@ import numpy as np
 
 from softevo.core.evaluator import BatchResult, Evaluator, refuse_dropped
 from softevo.core.nulls import from_nulls, to_null
+from softevo.core.objectives import NEEDS_ENERGY
 from softevo.core.physics import simulate, simulate_batch
 from softevo.core.robot import Robot, VoxelRobot
-from softevo.core.robot_file import RobotFileError, parse_robot
+from softevo.core.robot_file import RobotFileError, file_objective, parse_robot
 from softevo.core.settings import sim_settings
 
 
 def evaluate_robot_files(robot_files: Sequence[dict[str, Any]]) -> list[float | None]:
-    """The job function: robot files in, speeds out (None for a failed robot, JSON-safe)."""
+    """The job function: robot files in, fitness out (each file's `objective`, speed by
+    default; None for a failed robot, JSON-safe)."""
     robots: list[Robot | None] = []
     for document in robot_files:
         try:
             robots.append(parse_robot(document))
         except RobotFileError:
             robots.append(None)
+    objectives = [file_objective(d) for d, r in zip(robot_files, robots, strict=True) if r]
     built = [robot for robot in robots if robot is not None]
-    speeds = iter(result.speed for result in simulate_batch(built)) if built else iter(())
-    return [None if robot is None else to_null(next(speeds)) for robot in robots]
+    energy = any(objective in NEEDS_ENERGY for objective in objectives)
+    results = simulate_batch(built, energy=energy) if built else []
+    fitness = iter(r.measure(o) for r, o in zip(results, objectives, strict=True))
+    return [None if robot is None else to_null(next(fitness)) for robot in robots]
 
 
 def _timed(name: str, evaluate: Callable[[], np.ndarray]) -> BatchResult:

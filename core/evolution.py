@@ -52,7 +52,9 @@ class Evolution:
     def start(cls, config: RunConfig) -> Evolution:
         algorithm = GeneticAlgorithm(config.ga_config(), config.make_encoding())
         return cls(
-            config=config, engine=Engine(algorithm, config.sim), state=algorithm.start(config.seed)
+            config=config,
+            engine=Engine(algorithm, config.sim, objective=config.objective),
+            state=algorithm.start(config.seed),
         )
 
     @property

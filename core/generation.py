@@ -56,19 +56,26 @@ class Step:
 @dataclass(frozen=True)
 class Engine:
     """An algorithm with the encoding and simulation settings of one run, and how it evaluates:
-    batches of at most `batch_size` robots, at most `in_flight` of them at once."""
+    batches of at most `batch_size` robots, at most `in_flight` of them at once, each robot's
+    fitness measured by `objective`."""
 
     algorithm: GeneticAlgorithm
     sim: SimSettings
     batch_size: int = BATCH_SIZE
     in_flight: int = IN_FLIGHT
+    objective: str = "speed"
 
     @property
     def encoding(self) -> Encoding:
         return self.algorithm.encoding
 
     def robot_file(self, individual: Individual) -> dict[str, Any]:
-        return robot_to_json(self.encoding.to_robot(individual.genome, self.sim))
+        """The individual's robot file; one measured by another objective than `speed` says so
+        (a `speed` file stays as it always was, so are its batch keys)."""
+        document = robot_to_json(self.encoding.to_robot(individual.genome, self.sim))
+        if self.objective != "speed":
+            document["objective"] = self.objective
+        return document
 
     def step(
         self,

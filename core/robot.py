@@ -123,8 +123,13 @@ class Mechanics:
 
 
 def _initial_positions(lattice: Lattice, sim: SimSettings) -> np.ndarray:
+    """The lattice at rest, its lowest point `drop_height` above the terrain beneath it."""
     positions = lattice.rest_positions * sim.edge_length
-    positions[:, 2] += sim.drop_height - positions[:, 2].min()
+    if sim.terrain.kind == "flat":  # the original arithmetic, to the last bit
+        positions[:, 2] += sim.drop_height - positions[:, 2].min()
+        return positions
+    clearance = positions[:, 2] - sim.terrain.surface(positions[:, 0], positions[:, 1])
+    positions[:, 2] += sim.drop_height - clearance.min()
     return positions
 
 

@@ -4,7 +4,8 @@
      "shape": [nx, ny, nz],
      "voxels": [label, ...],                 # nx*ny*nz labels, x fastest, then y, then z
      "actuation": {"a": .., "b": .., "c": ..},   # genes of sine / neg_sine voxels
-     "sim": {"dt": .., ...}}                 # overrides of the default SimSettings
+     "sim": {"dt": .., ...},                 # overrides of the default SimSettings
+     "objective": "speed"}                   # optional: the measure that is its fitness
 
 A robot whose springs carry their own [k, b, w, c] (the paper's phase 2 cube) lists them under
 "springs" in the canonical spring order of `softevo.core.lattice`, instead of material labels.
@@ -28,6 +29,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from softevo.core.limits import MAX_FILE_BYTES, MAX_SIDE, MAX_VOXELS
+from softevo.core.objectives import Objective
 from softevo.core.robot import (
     GENE_BOUNDS,
     LABELS,
@@ -83,6 +85,7 @@ class _RobotModel(BaseModel):
     spring_labels: list[str] | None = Field(None, max_length=28 * MAX_VOXELS)
     actuation: _ActuationModel | None = None
     sim: dict[str, Any] = Field(default_factory=dict)
+    objective: Objective | None = None  # what the robot's fitness is (absent: speed)
 
     @field_validator("shape")
     @classmethod
@@ -109,6 +112,11 @@ def _occupancy(voxels: list[str] | None, n_voxels: int) -> tuple[bool, ...]:
     labels = voxels if voxels is not None else ["filled"] * n_voxels
     _check_labels(labels, ("empty", "filled"))
     return tuple(label == "filled" for label in labels)
+
+
+def file_objective(data: dict[str, Any]) -> str:
+    """The objective a (parsed, so valid) robot file's fitness is measured by."""
+    return data.get("objective") or "speed"
 
 
 def parse_robot(data: Any) -> Robot:
@@ -225,6 +233,7 @@ __all__ = [
     "FORMAT",
     "RobotFileError",
     "dump_robot",
+    "file_objective",
     "load_robot",
     "parse_robot",
     "robot_to_json",

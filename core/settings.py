@@ -12,6 +12,8 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from softevo.core.terrain import Flat, Terrain
+
 #: Largest number of integration steps one simulation may take (duration / dt).
 MAX_STEPS = 20_000_000
 
@@ -52,6 +54,10 @@ class SimSettings(BaseModel):
     )
     settle_time: float = Field(
         1.0, ge=0, description="time (s) at which the fitness clock and com_start start"
+    )
+    terrain: Terrain = Field(
+        default_factory=Flat,
+        description="the ground: flat (default), slope, steps, rough or hurdles (docs/tasks.md)",
     )
 
     @model_validator(mode="after")

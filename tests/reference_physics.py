@@ -15,6 +15,10 @@ Per step n (t = n * dt, state x_n, v_n; all masses weigh m):
 5. Coulomb friction as a velocity change of at most mu Fn dt / m against the horizontal
    velocity: a mass slower than that sticks (its horizontal velocity becomes 0);
 6. v_{n+1} = damping * u;  7. x_{n+1} = x_n + dt v_{n+1}.
+
+On a terrain other than flat, 3 and 5 use the surface's normal n and penetration depth
+(`terrain_contact`) instead of e_z and -z, and friction acts on u's part in the tangent plane.
+Actuator work: the sum over springs and steps from the settle step on of dt |T dL0/dt|.
 """
 
 from __future__ import annotations
@@ -31,12 +35,14 @@ SPRING_LENGTH_FLOOR = 1e-12
 
 @dataclass(frozen=True)
 class ReferenceRun:
-    """Positions [M, 3] at the settle step and at the end, and the recorded frames [F, M, 3]."""
+    """Positions [M, 3] at the settle step and at the end, the recorded frames [F, M, 3] and the
+    actuators' work."""
 
     settle_positions: np.ndarray
     final_positions: np.ndarray
     frames: np.ndarray
     frame_steps: np.ndarray
+    energy: float  # actuators' work from the settle step on (J)
 
 
 def spring_rest_lengths(mech: Mechanics, t: float) -> np.ndarray:
@@ -66,6 +72,65 @@ def spring_energy(mech: Mechanics, positions: np.ndarray, t: float = 0.0) -> flo
     return float(0.5 * np.sum(mech.stiffness * (d - spring_rest_lengths(mech, t)) ** 2))
 
 
+def terrain_contact(terrain: object, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Penetration depth [M] into the terrain and the outward unit normal [M, 3] of the surface
+    there (docs/physics.md "Terrain"): a height field's depth is measured along its normal,
+    (h - z) / |(-h_x, -h_y, 1)|; inside a step or a bar the nearest face wins (the tread or top
+    by +z, a riser or bar face by -x or +x; the top on a tie, the front on a front/back tie)."""
+    px, py, pz = x[:, 0], x[:, 1], x[:, 2]
+    normal = np.zeros_like(x)
+    normal[:, 2] = 1.0
+    kind = terrain.kind
+    if kind == "flat":
+        return np.maximum(-pz, 0.0), normal
+    if kind in ("slope", "rough"):
+        if kind == "slope":
+            h = px * np.tan(np.radians(terrain.angle_deg))
+            hx, hy = np.full_like(px, np.tan(np.radians(terrain.angle_deg))), np.zeros_like(px)
+        else:
+            waves = terrain.waves()
+            angle = waves[:, 0] * px[:, None] + waves[:, 1] * py[:, None] + waves[:, 2]
+            h = (waves[:, 3] * np.cos(angle)).sum(axis=1)
+            hx = -(waves[:, 3] * np.sin(angle) * waves[:, 0]).sum(axis=1)
+            hy = -(waves[:, 3] * np.sin(angle) * waves[:, 1]).sum(axis=1)
+        norm = np.sqrt(1.0 + hx**2 + hy**2)
+        inside = pz < h
+        normal = np.stack([-hx, -hy, np.ones_like(px)], axis=1) / norm[:, None]
+        return np.where(inside, (h - pz) / norm, 0.0), normal
+    depth = np.maximum(-pz, 0.0)
+    if kind == "steps":
+        index = np.maximum(np.floor(px / terrain.depth), 0.0)
+        top = index * terrain.height
+        face = px - index * terrain.depth
+        inside = pz < top
+        use_face = inside & (index >= 1) & (face < top - pz)
+        depth = np.where(inside, np.where(use_face, face, top - pz), 0.0)
+        normal[use_face] = (-1.0, 0.0, 0.0)
+        return depth, normal
+    # hurdles
+    index = np.floor(px / terrain.spacing)
+    along = px - index * terrain.spacing
+    on_bar = (index >= 1) & (along <= terrain.width) & (pz < terrain.height)
+    top, back = terrain.height - pz, terrain.width - along
+    front_wins = on_bar & (along < top) & (along <= back)
+    back_wins = on_bar & ~front_wins & (back < top)
+    top_wins = on_bar & ~front_wins & ~back_wins
+    depth = np.where(front_wins, along, np.where(back_wins, back, np.where(top_wins, top, depth)))
+    normal[front_wins] = (-1.0, 0.0, 0.0)
+    normal[back_wins] = (1.0, 0.0, 0.0)
+    return depth, normal
+
+
+def actuator_power(mech: Mechanics, positions: np.ndarray, t: float) -> np.ndarray:
+    """|T dL0/dt| of every spring (W): its tension times the rate its actuator changes L0."""
+    i, j = mech.lattice.springs[:, 0], mech.lattice.springs[:, 1]
+    d = np.linalg.norm(positions[j] - positions[i], axis=1)
+    tension = mech.stiffness * (d - spring_rest_lengths(mech, t))
+    w = mech.omega
+    rate = w * (mech.amp_sin * np.cos(w * t) - mech.amp_cos * np.sin(w * t))
+    return np.abs(tension * rate)
+
+
 def step(mech: Mechanics, x: np.ndarray, v: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
     """One semi-implicit Euler step from (x_n, v_n) to (x_{n+1}, v_{n+1})."""
     sim = mech.sim
@@ -73,6 +138,8 @@ def step(mech: Mechanics, x: np.ndarray, v: np.ndarray, n: int) -> tuple[np.ndar
     t = n * dt
     force = spring_forces(mech, x, t)
     force[:, 2] += m * sim.gravity
+    if sim.terrain.kind != "flat":
+        return _terrain_step(mech, x, v, force)
     normal = sim.ground_stiffness * np.maximum(-x[:, 2], 0.0)
     force[:, 2] += normal
     u = v + dt * force / m
@@ -93,6 +160,26 @@ def step(mech: Mechanics, x: np.ndarray, v: np.ndarray, n: int) -> tuple[np.ndar
     return x_next, v_next
 
 
+def _terrain_step(
+    mech: Mechanics, x: np.ndarray, v: np.ndarray, force: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Steps 3-7 on any terrain: the normal force along the surface normal n, and friction
+    against the part of u in the tangent plane, u - (u . n) n."""
+    sim = mech.sim
+    m, dt = sim.mass, sim.dt
+    depth, n = terrain_contact(sim.terrain, x)
+    normal = sim.ground_stiffness * depth
+    u = v + dt * (force + normal[:, None] * n) / m
+    along = (u * n).sum(axis=1)
+    tangent = u - along[:, None] * n
+    speed = np.linalg.norm(tangent, axis=1)
+    max_change = sim.friction * normal * dt / m
+    scale = np.where(speed <= max_change, 0.0, 1.0 - max_change / np.where(speed > 0, speed, 1.0))
+    u = tangent * scale[:, None] + along[:, None] * n
+    v_next = sim.damping * u
+    return x + dt * v_next, v_next
+
+
 def run(mech: Mechanics, record_every: int = 0) -> ReferenceRun:
     """Simulate `mech` from rest at its initial positions for `sim.n_steps` steps.
 
@@ -105,10 +192,13 @@ def run(mech: Mechanics, record_every: int = 0) -> ReferenceRun:
     v = np.zeros_like(x)
     settle = x.copy() if settle_step == 0 else None
     frames, frame_steps = [], []
+    work = np.zeros(mech.n_springs)
     for n in range(n_steps):
         if record_every > 0 and n % record_every == 0:
             frames.append(x.copy())
             frame_steps.append(n)
+        if n >= settle_step:
+            work += sim.dt * actuator_power(mech, x, n * sim.dt)
         x, v = step(mech, x, v, n)
         if n + 1 == settle_step:
             settle = x.copy()
@@ -121,4 +211,5 @@ def run(mech: Mechanics, record_every: int = 0) -> ReferenceRun:
         final_positions=x,
         frames=np.array(frames).reshape(-1, *x.shape),
         frame_steps=np.array(frame_steps, dtype=np.int64),
+        energy=float(work.sum()),
     )

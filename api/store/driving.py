@@ -12,7 +12,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from sqlalchemy import Connection, bindparam, insert, select, update
-from sqlalchemy.orm import Session
 
 from softevo.api.db import Database
 from softevo.api.models import Generation, Individual, Run
@@ -46,8 +45,8 @@ class GenerationMismatchError(RuntimeError):
     """The stored generation is not the one the algorithm regenerated from the run's seed."""
 
 
-def _fence(session: Session, run_id: int, lease: Lease) -> None:
-    if not leases.owns(session, run_id, lease.owner, lease.seconds):
+def _fence(connection: Connection, run_id: int, lease: Lease) -> None:
+    if not leases.owns(connection, run_id, lease.owner, lease.seconds):
         raise LeaseLostError(f"run {run_id}: lease lost or run no longer running")
 
 
@@ -76,10 +75,9 @@ def keep_generation(
 ) -> dict[int, float]:
     """Insert the generation's members (dicts of genome, genome_hash, operator, parents), once;
     if it was kept before (a takeover), check it is the same and return the fitness saved."""
-    with db.write() as session:
-        _fence(session, run_id, lease)
+    with db.writing() as connection:
+        _fence(connection, run_id, lease)
         columns = INDIVIDUALS.c
-        connection = session.connection()
         rows = connection.execute(
             select(columns["index"], columns.genome_hash, columns.status, columns.fitness)
             .where(columns.run_id == run_id, columns.generation == generation)
@@ -164,11 +162,11 @@ def save_fitness(
     db: Database, run_id: int, lease: Lease, generation: int, landed: Sequence[Landed]
 ) -> None:
     """Batches' fitness, written once per individual, in one transaction."""
-    with db.write() as session:
-        _fence(session, run_id, lease)
+    with db.writing() as connection:
+        _fence(connection, run_id, lease)
         rows = _fitness_rows(run_id, generation, landed)
         if rows:
-            session.connection().execute(_SET_FITNESS, rows)
+            connection.execute(_SET_FITNESS, rows)
 
 
 def _insert_members(
@@ -212,9 +210,8 @@ def commit_generation(db: Database, run_id: int, lease: Lease, commit: Generatio
     stats = commit.stats
     generation = stats["generation"]
     best = (None, None) if commit.best is None else commit.best
-    with db.write() as session:
-        _fence(session, run_id, lease)
-        connection = session.connection()
+    with db.writing() as connection:
+        _fence(connection, run_id, lease)
         rows = _fitness_rows(run_id, generation, commit.landed)
         cached = [Landed(commit.cached, None, None)]
         rows += _fitness_rows(run_id, generation, cached, IndividualStatus.CACHED)

@@ -94,6 +94,97 @@ def _integrate(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction,
         z[m] += vz[m] * dt
 
 
+@njit(inline="always", **_JIT)
+def _contact(kind, tp, x, y, z):
+    """Penetration depth (m) of a point at (x, y, z) into the terrain and the surface's unit
+    outward normal there (depth 0: no contact). `kind` and `tp` come from
+    `softevo.core.terrain.kernel_params`; see docs/physics.md "Terrain" for edges and faces."""
+    if kind == 1:  # slope: tp = tan, cos, sin of the angle; z = x tan
+        gap = x * tp[0] - z
+        if gap <= 0.0:
+            return 0.0, 0.0, 0.0, 1.0
+        return gap * tp[1], -tp[2], 0.0, tp[1]
+    if kind == 2:  # steps: tp = height, depth; step i (x in [i D, (i + 1) D)) has top i H
+        index = max(math.floor(x / tp[1]), 0.0)
+        top = index * tp[0]
+        if z >= top:
+            return 0.0, 0.0, 0.0, 1.0
+        below = top - z
+        face = x - index * tp[1]  # back through the riser the point crossed
+        if index >= 1.0 and face < below:
+            return face, -1.0, 0.0, 0.0
+        return below, 0.0, 0.0, 1.0
+    if kind == 3:  # rough: tp = ROUGH_WAVES rows of kx, ky, phase, weight
+        reach = 0.0
+        for w in range(tp.shape[0] // 4):
+            reach += abs(tp[4 * w + 3])
+        if z >= reach:  # above the highest the field can reach: no trigonometry
+            return 0.0, 0.0, 0.0, 1.0
+        h = 0.0
+        hx = 0.0
+        hy = 0.0
+        for w in range(tp.shape[0] // 4):
+            kx, ky, phase, weight = tp[4 * w], tp[4 * w + 1], tp[4 * w + 2], tp[4 * w + 3]
+            angle = kx * x + ky * y + phase
+            h += weight * math.cos(angle)
+            slope = weight * math.sin(angle)
+            hx -= slope * kx
+            hy -= slope * ky
+        if z >= h:
+            return 0.0, 0.0, 0.0, 1.0
+        norm = math.sqrt(1.0 + hx * hx + hy * hy)
+        return (h - z) / norm, -hx / norm, -hy / norm, 1.0 / norm
+    if kind == 4:  # hurdles: tp = height, spacing, width; bar i >= 1 spans [i S, i S + W]
+        index = math.floor(x / tp[1])
+        along = x - index * tp[1]
+        if index >= 1.0 and along <= tp[2] and z < tp[0]:
+            top = tp[0] - z
+            back = tp[2] - along
+            if along < top and along <= back:
+                return along, -1.0, 0.0, 0.0
+            if back < top:
+                return back, 1.0, 0.0, 0.0
+            return top, 0.0, 0.0, 1.0
+    if z < 0.0:  # flat ground (and the ground between hurdles)
+        return -z, 0.0, 0.0, 1.0
+    return 0.0, 0.0, 0.0, 1.0
+
+
+@njit(inline="always", **_JIT)
+def _integrate_terrain(
+    step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt, kind, tp
+):
+    """`_integrate` on any terrain: the penalty force along the surface normal, Coulomb
+    friction against the velocity's part in the tangent plane."""
+    for m in range(x.shape[0]):
+        h = step_factor[m]
+        depth, nx, ny, nz = _contact(kind, tp, x[m], y[m], z[m])
+        normal = ground_k * depth
+        ux = vx[m] + (fx[m] + normal * nx) * h
+        uy = vy[m] + (fy[m] + normal * ny) * h
+        uz = vz[m] + (fz[m] + normal * nz) * h
+        along = ux * nx + uy * ny + uz * nz
+        tx = ux - along * nx
+        ty = uy - along * ny
+        tz = uz - along * nz
+        speed = math.sqrt(tx * tx + ty * ty + tz * tz)
+        slip = max(1.0 - friction * normal * h / max(speed, V_MIN), 0.0)
+        vx[m] = (tx * slip + along * nx) * damping
+        vy[m] = (ty * slip + along * ny) * damping
+        vz[m] = (tz * slip + along * nz) * damping
+        x[m] += vx[m] * dt
+        y[m] += vy[m] * dt
+        z[m] += vz[m] * dt
+
+
+@njit(inline="always", **_JIT)
+def _actuator_power(dx, dy, dz, k, rest, amp_sin, amp_cos, sin_t, cos_t, omega):
+    """|T dL0/dt| (W): the rate at which a spring's actuator works against its tension T."""
+    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+    length0 = rest + amp_sin * sin_t + amp_cos * cos_t
+    return abs(k * (d - length0) * (omega * (amp_sin * cos_t - amp_cos * sin_t)))
+
+
 @njit(**_JIT)
 def simulate_one(
     x, y, z, vx, vy, vz,  # [M] positions (m), velocities (m/s); updated in place
@@ -101,8 +192,10 @@ def simulate_one(
     spring_a, spring_b,  # [S] int64 mass indices (the lattice's order: sorted, a < b)
     stiffness, rest, amp_sin, amp_cos,  # [S] float64
     omega, dt, n_steps, weight, ground_k, friction, damping,
+    terrain_kind, terrain,  # softevo.core.terrain.kernel_params
     settle_step, settle_x, settle_y, settle_z,  # positions copied when step == settle_step
     record_every, frames,  # frames [F, 3, M]: positions every record_every steps, and the last
+    energy,  # [S] actuator work of each spring from settle_step on (J), or [0]: not measured
 ):  # fmt: skip
     n_masses = x.shape[0]
     n_springs = spring_a.shape[0]
@@ -150,6 +243,12 @@ def simulate_one(
             sfx[s] = x[j] - x[i]
             sfy[s] = y[j] - y[i]
             sfz[s] = z[j] - z[i]
+        if energy.shape[0] > 0 and step >= settle_step:
+            for s in range(n_springs):
+                energy[s] += dt * _actuator_power(
+                    sfx[s], sfy[s], sfz[s], stiffness[s], rest[s], amp_sin[s], amp_cos[s],
+                    sin_t, cos_t, omega,
+                )  # fmt: skip
         for s in range(n_springs):
             sfx[s], sfy[s], sfz[s] = _spring_force(
                 sfx[s], sfy[s], sfz[s], stiffness[s], rest[s], amp_sin[s], amp_cos[s], sin_t, cos_t
@@ -172,7 +271,12 @@ def simulate_one(
             fx[m] = ax
             fy[m] = ay
             fz[m] = az
-        _integrate(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt)
+        if terrain_kind == 0:  # the flat ground's original arithmetic
+            _integrate(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction,
+                       damping, dt)  # fmt: skip
+        else:
+            _integrate_terrain(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction,
+                               damping, dt, terrain_kind, terrain)  # fmt: skip
 
 
 @njit(**_JIT)
@@ -182,7 +286,9 @@ def simulate_many(
     offsets,  # [D] int64, ascending: slot (q, p) is the spring from point p to p + offsets[q]
     stiffness, rest, amp_sin, amp_cos,  # [D, P, B] float64, k = 0 where a slot is no spring
     omega, dt, n_steps, weight, ground_k, friction, damping,
+    terrain_kind, terrain,  # softevo.core.terrain.kernel_params
     settle_step, settle_x, settle_y, settle_z,  # [P, B]
+    energy,  # [D, P, B] actuator work of each slot from settle_step on (J), or [0, 0, 0]
 ):  # fmt: skip
     n_points, n_robots = x.shape
     n = n_points * n_robots
@@ -196,6 +302,8 @@ def simulate_many(
     rest = rest.reshape(n_dir, n)
     amp_sin = amp_sin.reshape(n_dir, n)
     amp_cos = amp_cos.reshape(n_dir, n)
+    measure = energy.shape[0] > 0
+    energy = energy.reshape(energy.shape[0], energy.shape[1] * energy.shape[2])
     # Spring force components of every slot, then the force on every point.
     sfx = np.empty((n_dir, n))
     sfy = np.empty((n_dir, n))
@@ -224,6 +332,13 @@ def simulate_many(
             xj, yj, zj = x[shift:], y[shift:], z[shift:]
             k, r0, a_s, a_c = stiffness[q], rest[q], amp_sin[q], amp_cos[q]
             px, py, pz = sfx[q], sfy[q], sfz[q]
+            if measure and step >= settle_step:
+                work = energy[q]
+                for e in range(count):
+                    work[e] += dt * _actuator_power(
+                        xj[e] - xi[e], yj[e] - yi[e], zj[e] - zi[e],
+                        k[e], r0[e], a_s[e], a_c[e], sin_t, cos_t, omega,
+                    )  # fmt: skip
             for e in range(count):
                 px[e], py[e], pz[e] = _spring_force(
                     xj[e] - xi[e], yj[e] - yi[e], zj[e] - zi[e],
@@ -260,4 +375,9 @@ def simulate_many(
                 fy[e] += py[e]
             for e in range(count):
                 fz[e] += pz[e]
-        _integrate(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt)
+        if terrain_kind == 0:  # the flat ground's original arithmetic
+            _integrate(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction,
+                       damping, dt)  # fmt: skip
+        else:
+            _integrate_terrain(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction,
+                               damping, dt, terrain_kind, terrain)  # fmt: skip

@@ -17,9 +17,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from softevo.core.nulls import to_null
+from softevo.core.objectives import OBJECTIVE_MEASURES, STANDARD_GRAVITY
 from softevo.core.physics import kernels
 from softevo.core.robot import Mechanics, Robot, build_mechanics
 from softevo.core.settings import SimSettings
+from softevo.core.terrain import kernel_params
 
 #: Robots per `simulate_many` call. 8 doubles fill one AVX-512 vector, and a batch of 8 solid
 #: 4x4x4 robots keeps its arrays in a 1 MB L2 cache: 4 to 8 measured fastest, 32 about 30 %
@@ -65,6 +67,29 @@ class SimResult:
     wall_seconds: float
     stable: bool  # every position finite at the end, no spring blown past MAX_STRETCH
     final_positions: np.ndarray  # [M, 3] (m)
+    forward_speed: float = math.nan  # net displacement along +x / measured time (m/s)
+    climb_rate: float = math.nan  # rise of the centre of mass / measured time (m/s)
+    energy: float = math.nan  # actuators' work over the measured time (J; NaN: not measured)
+    total_mass: float = math.nan  # (kg)
+
+    @property
+    def cost_of_transport(self) -> float:
+        """energy / (total mass x g x distance): dimensionless, lower is cheaper."""
+        weight_distance = self.total_mass * STANDARD_GRAVITY * self.distance
+        if not self.stable or math.isnan(self.energy) or weight_distance <= 0:
+            return math.nan
+        return self.energy / weight_distance
+
+    @property
+    def efficiency(self) -> float:
+        """distance per joule of actuator work (m/J); 0 for a robot that did no work."""
+        if not self.stable or math.isnan(self.energy):
+            return math.nan
+        return self.distance / self.energy if self.energy > 0 else 0.0
+
+    def measure(self, objective: str) -> float:
+        """The fitness of this result under `objective` (softevo.core.objectives)."""
+        return float(getattr(self, OBJECTIVE_MEASURES[objective]))
 
     def to_json(self) -> dict:
         """The `softevo simulate` output (no final positions)."""
@@ -76,6 +101,10 @@ class SimResult:
             "com_end": list(self.com_end),
             "distance": _json_float(self.distance),
             "speed": _json_float(self.speed),
+            "forward_speed": _json_float(self.forward_speed),
+            "climb_rate": _json_float(self.climb_rate),
+            "energy": _json_float(self.energy),
+            "cost_of_transport": _json_float(self.cost_of_transport),
             "wall_seconds": self.wall_seconds,
             "stable": self.stable,
         }
@@ -94,6 +123,7 @@ def _scalars(mech: Mechanics) -> tuple:
         sim.ground_stiffness,
         sim.friction,
         sim.damping,
+        *kernel_params(sim.terrain),
         sim.settle_steps,
     )
 
@@ -113,17 +143,24 @@ def _blown_up(mech: Mechanics, end: np.ndarray) -> bool:
     return bool((length > MAX_STRETCH * longest).any())
 
 
-def _result(mech: Mechanics, start: np.ndarray, end: np.ndarray, wall: float) -> SimResult:
-    """Build a result from positions [M, 3] at settle time and at the end.
+def _result(
+    mech: Mechanics, start: np.ndarray, end: np.ndarray, wall: float, work: np.ndarray | None
+) -> SimResult:
+    """Build a result from positions [M, 3] at settle time and at the end, and the actuator work
+    of every spring in spring order (None: not measured).
 
-    Both are made C-contiguous first: NumPy sums a column in a different order for other
-    layouts, and the centre of mass must not depend on whether the robot ran alone or batched.
+    Positions are made C-contiguous first: NumPy sums a column in a different order for other
+    layouts, and the centre of mass must not depend on whether the robot ran alone or batched;
+    the work is summed from one array in spring order for the same reason.
     """
     start, end = np.ascontiguousarray(start), np.ascontiguousarray(end)
     com_start = start.mean(axis=0)
     com_end = end.mean(axis=0)
     stable = bool(np.isfinite(end).all()) and not _blown_up(mech, end)
     distance = float(np.hypot(*(com_end[:2] - com_start[:2]))) if stable else math.nan
+    seconds = mech.sim.measured_time
+    moved = (com_end - com_start) / seconds if stable else np.full(3, math.nan)
+    energy = math.nan if work is None else float(np.sum(np.ascontiguousarray(work)))
     return SimResult(
         masses=mech.n_masses,
         springs=mech.n_springs,
@@ -131,17 +168,22 @@ def _result(mech: Mechanics, start: np.ndarray, end: np.ndarray, wall: float) ->
         com_start=tuple(float(v) for v in com_start),
         com_end=tuple(float(v) for v in com_end),
         distance=distance,
-        speed=distance / mech.sim.measured_time,
+        speed=distance / seconds,
         wall_seconds=wall,
         stable=stable,
         final_positions=end,
+        forward_speed=float(moved[0]),
+        climb_rate=float(moved[2]),
+        energy=energy,
+        total_mass=mech.n_masses * mech.sim.mass,
     )
 
 
 def simulate(
-    robot: Robot | Mechanics, *, record_every: int = 0
+    robot: Robot | Mechanics, *, record_every: int = 0, energy: bool = True
 ) -> tuple[SimResult, Trajectory | None]:
-    """Simulate one robot; with `record_every` > 0 also return positions every that many steps."""
+    """Simulate one robot; with `record_every` > 0 also return positions every that many steps;
+    `energy`: measure the actuators' work (a little slower)."""
     mech = robot if isinstance(robot, Mechanics) else build_mechanics(robot)
     n_steps = mech.sim.n_steps
     pos = np.ascontiguousarray(mech.positions.T)  # [3, M]
@@ -150,21 +192,21 @@ def simulate(
     n_frames = len(range(0, n_steps, record_every)) + 1 if record_every > 0 else 0
     frames = np.empty((n_frames, 3, mech.n_masses))
     step_factor = np.full(mech.n_masses, mech.sim.dt / mech.sim.mass)
-    omega, dt, steps, weight, ground_k, friction, damping, settle_step = _scalars(mech)
+    *scalars, settle_step = _scalars(mech)
     springs = mech.lattice.springs
+    work = np.zeros(mech.n_springs if energy else 0)
     started = time.perf_counter()
     kernels.simulate_one(
         pos[0], pos[1], pos[2], vel[0], vel[1], vel[2], step_factor,
         np.ascontiguousarray(springs[:, 0]), np.ascontiguousarray(springs[:, 1]),
         mech.stiffness, mech.rest_length, mech.amp_sin, mech.amp_cos,
-        omega, dt, steps, weight, ground_k, friction, damping,
-        settle_step, settle[0], settle[1], settle[2], record_every, frames,
+        *scalars, settle_step, settle[0], settle[1], settle[2], record_every, frames, work,
     )  # fmt: skip
     wall = time.perf_counter() - started
-    result = _result(mech, settle.T, pos.T.copy(), wall)
+    result = _result(mech, settle.T, pos.T.copy(), wall, work if energy else None)
     if not record_every:
         return result, None
-    times = np.array([*range(0, n_steps, record_every), n_steps], dtype=np.float64) * dt
+    times = np.array([*range(0, n_steps, record_every), n_steps], dtype=np.float64) * mech.sim.dt
     trajectory = Trajectory(
         times=times,
         frames=frames.transpose(0, 2, 1).copy(),
@@ -191,7 +233,7 @@ def _box_offsets(box: tuple[int, int, int]) -> np.ndarray:
     return np.array(sorted(o for o in offsets if o > 0), dtype=np.int64)
 
 
-def _run_group(group: list[Mechanics]) -> list[SimResult]:
+def _run_group(group: list[Mechanics], energy: bool) -> list[SimResult]:
     """Run robots that share settings and omega in one `simulate_many` call.
 
     The kernel works on the bounding box of the robots' lattice points, numbered x fastest like
@@ -214,7 +256,7 @@ def _run_group(group: list[Mechanics]) -> list[SimResult]:
     pos = np.repeat((box_xyz.T * edge)[:, :, None], n_robots, axis=2)  # [3, P, B]
     step_factor = np.zeros((n_points, n_robots))
     params = np.zeros((4, len(offsets), n_points, n_robots))
-    box_rows = []
+    box_rows, slots = [], []
     for r, (mech, c) in enumerate(zip(group, coords, strict=True)):
         rel = c - low
         rows = rel[:, 0] + bx * (rel[:, 1] + by * rel[:, 2])  # box index of each mass, ascending
@@ -231,19 +273,24 @@ def _run_group(group: list[Mechanics]) -> list[SimResult]:
             mech.amp_cos,
         )
         box_rows.append(rows)
+        slots.append((slot, first_end))  # each spring's slot, in spring order
     vel = np.zeros_like(pos)
     settle = np.empty_like(pos)
+    work = np.zeros(params.shape[1:] if energy else (0, 0, 0))
     started = time.perf_counter()
     kernels.simulate_many(
         pos[0], pos[1], pos[2], vel[0], vel[1], vel[2], step_factor, offsets,
         params[0], params[1], params[2], params[3], *_scalars(first),
-        settle[0], settle[1], settle[2],
+        settle[0], settle[1], settle[2], work,
     )  # fmt: skip
     wall = (time.perf_counter() - started) / n_robots
-    return [
-        _result(mech, settle[:, rows, r].T, pos[:, rows, r].T.copy(), wall)
-        for r, (mech, rows) in enumerate(zip(group, box_rows, strict=True))
-    ]
+    results = []
+    for r, (mech, rows, (slot, first_end)) in enumerate(zip(group, box_rows, slots, strict=True)):
+        spring_work = work[slot, first_end, r] if energy else None
+        results.append(
+            _result(mech, settle[:, rows, r].T, pos[:, rows, r].T.copy(), wall, spring_work)
+        )
+    return results
 
 
 def _group_key(mech: Mechanics) -> tuple[tuple[int, int, int], SimSettings, float]:
@@ -251,13 +298,18 @@ def _group_key(mech: Mechanics) -> tuple[tuple[int, int, int], SimSettings, floa
 
 
 def simulate_batch(
-    robots: Sequence[Robot | Mechanics], *, threads: int = 1, lanes: int = DEFAULT_LANES
+    robots: Sequence[Robot | Mechanics],
+    *,
+    threads: int = 1,
+    lanes: int = DEFAULT_LANES,
+    energy: bool = False,
 ) -> list[SimResult]:
     """Simulate many robots; results in input order.
 
     Robots with the same grid shape, settings and actuation frequency run together, `lanes` at a
     time in the SIMD kernel; chunks run on `threads` threads (the kernel releases the GIL).
-    `wall_seconds` of each result is its share of its chunk's time.
+    `wall_seconds` of each result is its share of its chunk's time. `energy`: measure the
+    actuators' work too (the kernel's extra loop costs time; fitness by `speed` does not need it).
     """
     if threads < 1 or lanes < 1:
         raise ValueError(f"threads and lanes must be >= 1, got {threads} and {lanes}")
@@ -272,7 +324,7 @@ def simulate_batch(
     results: list[SimResult | None] = [None] * len(mechs)
 
     def run(chunk: list[int]) -> None:
-        for index, result in zip(chunk, _run_group([mechs[i] for i in chunk]), strict=True):
+        for index, result in zip(chunk, _run_group([mechs[i] for i in chunk], energy), strict=True):
             results[index] = result
 
     if threads == 1 or len(chunks) == 1:

@@ -1,0 +1,155 @@
+"""Terrain: the ground a robot moves on, as a simulation setting (`sim.terrain`).
+
+Every kind is a solid below a surface; a mass inside it is pushed out along the surface normal
+by the same penalty spring and held by the same Coulomb friction as on the flat ground (the
+kernels' `_contact`, docs/physics.md "Terrain"). The surface is a function of x and y only and
+every kind is invariant along y except `rough`:
+
+* `flat`: z = 0 (the paper's ground; the default, and the kernels' original arithmetic);
+* `slope`: a plane through the origin rising along +x at `angle_deg`;
+* `steps`: stairs rising along +x, the first riser at x = `depth`, each `height` higher;
+* `rough`: a smooth random height field (a sum of cosines whose directions and phases come from
+  `seed` through NumPy's PCG64, so the same seed gives the same field on every machine);
+* `hurdles`: bars `height` high and `width` long across the path, the first at x = `spacing`
+  and then every `spacing`.
+
+`kernel_params` packs a terrain into the kernels' (kind code, float64 parameters); `surface(x, y)`
+evaluates the surface in NumPy (for placing a robot above it, drawing it and the reference).
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+from typing import Annotated, Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
+
+#: Kind codes the kernels branch on (FLAT keeps the flat ground's original arithmetic).
+FLAT, SLOPE, STEPS, ROUGH, HURDLES = 0, 1, 2, 3, 4
+#: Cosines summed by a rough terrain.
+ROUGH_WAVES = 8
+
+_MODEL = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
+
+
+class Flat(BaseModel):
+    model_config = _MODEL
+    kind: Literal["flat"] = "flat"
+
+    @property
+    def code(self) -> int:
+        return FLAT
+
+    def params(self) -> list[float]:
+        return [0.0]
+
+    def surface(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return np.zeros(np.broadcast(x, y).shape)
+
+
+class Slope(BaseModel):
+    model_config = _MODEL
+    kind: Literal["slope"] = "slope"
+    angle_deg: float = Field(
+        description="rise along +x (degrees; negative: downhill)", ge=-60, le=60
+    )
+
+    @property
+    def code(self) -> int:
+        return SLOPE
+
+    def params(self) -> list[float]:
+        angle = math.radians(self.angle_deg)
+        return [math.tan(angle), math.cos(angle), math.sin(angle)]
+
+    def surface(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        return np.broadcast_to(np.asarray(x, dtype=float) * math.tan(math.radians(self.angle_deg)),
+                               np.broadcast(x, y).shape).copy()  # fmt: skip
+
+
+class Steps(BaseModel):
+    model_config = _MODEL
+    kind: Literal["steps"] = "steps"
+    height: float = Field(description="rise of each step (m)", gt=0, le=100)
+    depth: float = Field(description="tread of each step along x (m)", gt=0, le=1000)
+
+    @property
+    def code(self) -> int:
+        return STEPS
+
+    def params(self) -> list[float]:
+        return [self.height, self.depth]
+
+    def surface(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        index = np.maximum(np.floor(np.asarray(x, dtype=float) / self.depth), 0.0)
+        return np.broadcast_to(index * self.height, np.broadcast(x, y).shape).copy()
+
+
+class Rough(BaseModel):
+    model_config = _MODEL
+    kind: Literal["rough"] = "rough"
+    amplitude: float = Field(description="largest height above or below z = 0 (m)", gt=0, le=100)
+    wavelength: float = Field(description="wavelength of the field's cosines (m)", gt=0, le=1000)
+    seed: int = Field(0, ge=0, le=2**32 - 1, description="the field's random directions, phases")
+
+    @property
+    def code(self) -> int:
+        return ROUGH
+
+    def waves(self) -> np.ndarray:
+        """[ROUGH_WAVES, 4]: wave vector (kx, ky) (rad/m), phase (rad), weight (m)."""
+        return _waves(self.amplitude, self.wavelength, self.seed)
+
+    def params(self) -> list[float]:
+        return self.waves().ravel().tolist()
+
+    def surface(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+        total = np.zeros(x.shape)
+        for kx, ky, phase, weight in self.waves().tolist():  # the kernels' order of summation
+            total = total + weight * np.cos(kx * x + ky * y + phase)
+        return total
+
+
+@lru_cache(maxsize=64)
+def _waves(amplitude: float, wavelength: float, seed: int) -> np.ndarray:
+    rng = np.random.Generator(np.random.PCG64(seed))
+    angle = rng.uniform(0.0, 2.0 * math.pi, ROUGH_WAVES)
+    phase = rng.uniform(0.0, 2.0 * math.pi, ROUGH_WAVES)
+    wavenumber = 2.0 * math.pi / wavelength
+    weight = np.full(ROUGH_WAVES, amplitude / ROUGH_WAVES)
+    waves = np.stack([wavenumber * np.cos(angle), wavenumber * np.sin(angle), phase, weight], 1)
+    waves.flags.writeable = False
+    return waves
+
+
+class Hurdles(BaseModel):
+    model_config = _MODEL
+    kind: Literal["hurdles"] = "hurdles"
+    height: float = Field(description="height of each bar (m)", gt=0, le=100)
+    spacing: float = Field(description="distance between bars' front faces (m)", gt=0, le=1000)
+    width: float = Field(description="length of each bar along x (m)", gt=0, le=1000)
+
+    @property
+    def code(self) -> int:
+        return HURDLES
+
+    def params(self) -> list[float]:
+        return [self.height, self.spacing, self.width]
+
+    def surface(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        x = np.asarray(x, dtype=float)
+        index = np.floor(x / self.spacing)
+        on_bar = (index >= 1) & (x - index * self.spacing <= self.width)
+        return np.broadcast_to(np.where(on_bar, self.height, 0.0), np.broadcast(x, y).shape).copy()
+
+
+AnyTerrain = Flat | Slope | Steps | Rough | Hurdles
+Terrain = Annotated[AnyTerrain, Field(discriminator="kind")]
+
+
+def kernel_params(terrain: AnyTerrain) -> tuple[int, np.ndarray]:
+    """The kernels' terrain arguments: kind code and a float64 parameter array."""
+    return terrain.code, np.array(terrain.params(), dtype=np.float64)
