@@ -15,7 +15,10 @@ from pydantic import BaseModel, ConfigDict, Field, create_model
 from softevo.core.config import PAPER_NINE_SHAPES
 from softevo.core.ga.algorithm import GAConfig
 from softevo.core.limits import MAX_SIDE
+from softevo.core.objectives import Objective
 from softevo.core.status import IndividualStatus, RunStatus
+from softevo.core.tasks import TASKS
+from softevo.core.terrain import Terrain
 
 # Strict numbers in every body: no bool or string for a number, no float for a count.
 Side = Annotated[int, Field(ge=1, le=MAX_SIDE, strict=True)]
@@ -29,8 +32,14 @@ class _RunSettings(BaseModel):
 
     preset: str = Field("paper-voxel", description="preset whose settings the others override")
     encoding: Literal["voxel", "cube-springs", "spring"] | None = None
-    sim: dict[str, Number] | None = Field(
-        None, max_length=32, description="simulation settings to override"
+    sim: dict[str, Number | Terrain] | None = Field(
+        None,
+        max_length=32,
+        description="simulation settings to override; `terrain` takes an object such as "
+        '{"kind": "slope", "angle_deg": 10} (docs/tasks.md)',
+    )
+    objective: Objective | None = Field(
+        None, description="fitness: speed (default), forward, climb or efficiency (docs/tasks.md)"
     )
     cube_options: list[tuple[Number, Number, Number, Number]] | None = Field(
         None, max_length=64, description="the cube's spring options [k, b, w, c] (at most 64)"
@@ -58,12 +67,18 @@ class RunCreate(RunSettings):  # type: ignore[misc, valid-type]
 
 
 class SweepCreate(RunSettings):  # type: ignore[misc, valid-type]
-    """One base config over many bounding boxes and seeds (default: the paper's nine, seeds 1-3)."""
+    """One base config over many bounding boxes and seeds (default: the paper's nine, seeds 1-3),
+    or over task presets and seeds (`tasks`: each task's own box unless `shapes` is given)."""
 
     shapes: list[Shape] = Field(
         default_factory=lambda: list(PAPER_NINE_SHAPES), min_length=1, max_length=1000
     )
     seeds: list[Seed] = Field(default_factory=lambda: [1, 2, 3], min_length=1, max_length=1000)
+    tasks: list[Literal[tuple(TASKS)]] | None = Field(  # type: ignore[valid-type]
+        None, min_length=1, max_length=len(TASKS),
+        description="task presets to sweep instead of boxes (GET /presets), e.g. "
+        '["task-flat", "task-slope"]',
+    )  # fmt: skip
 
 
 class RunProgress(BaseModel):
@@ -150,6 +165,7 @@ class IndividualPage(BaseModel):
 
 class SweepBox(BaseModel):
     shape: Shape
+    task: str | None = Field(None, description="the task preset, in a sweep over tasks")
     run_ids: list[int]
     statuses: list[str]
     completed: int

@@ -18,6 +18,7 @@ from softevo.core.ga.algorithm import GAConfig
 from softevo.core.limits import MAX_SIDE, MAX_VOXELS
 from softevo.core.objectives import Objective
 from softevo.core.settings import SimSettings, format_validation_error
+from softevo.core.tasks import TASKS, task_presets
 
 CubeOption = tuple[float, float, float, float]
 #: The paper's nine bounding boxes (Figure 4a), in its order.
@@ -143,12 +144,15 @@ PRESETS: dict[str, dict[str, Any]] = {
     },
 }
 
+PRESETS.update(task_presets(_PAPER_VOXEL))
+
 PRESET_DESCRIPTIONS = {
     "paper-cube": "paper phase 2: one cube, 28 springs pick one of 4 [k,b,w,c] options",
     "paper-voxel": "paper phase 3: voxel robots in a bounding box (4x4x4 by default)",
     "voxel-plus": "paper-voxel with half the children mutated: it keeps improving where "
     "paper-voxel stalls (docs/evolution.md)",
     "quick": "a small voxel run for demos and tests (3x3x3, 16 x 20 generations, 3 s)",
+    **{name: f"paper-voxel task: {asks}" for name, (asks, _, _) in TASKS.items()},
 }
 
 

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, BinaryIO
 
 from softevo.core.nulls import from_null
+from softevo.core.objectives import objective_label
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -40,6 +41,25 @@ def pyplot() -> Any:
     return plt
 
 
+SPEED = "speed (m/s)"
+
+
+def run_title(config: dict[str, Any], run: str = "") -> str:
+    """`run 3 (4x4x4, seed 1, task-stairs: steps terrain)`: a run named with its task."""
+    terrain = config.get("sim", {}).get("terrain", {}).get("kind", "flat")
+    shape = config.get("shape")
+    parts = [f"{'x'.join(map(str, shape))}" if shape else "", f"seed {config.get('seed')}"]
+    if terrain != "flat" or config.get("objective", "speed") != "speed":
+        parts.append(f"{config.get('preset') or 'custom'}: {terrain} terrain")
+    inner = ", ".join(p for p in parts if p)
+    return f"{run} ({inner})" if run else inner
+
+
+def fitness_label(config: dict[str, Any]) -> str:
+    """The fitness axis of a run's figures: its objective, with units."""
+    return objective_label(config.get("objective") or "speed")
+
+
 def _value(row: Row, key: str) -> float:
     return from_null(row.get(key))
 
@@ -51,7 +71,7 @@ def _generation_axis(axes: Any) -> None:
     axes.xaxis.set_major_locator(MaxNLocator(integer=True))
 
 
-def draw_curve(axes: Any, rows: Sequence[Row], title: str) -> None:
+def draw_curve(axes: Any, rows: Sequence[Row], title: str, ylabel: str = SPEED) -> None:
     generations = [int(row["generation"]) for row in rows]
     axes.plot(
         generations,
@@ -64,12 +84,12 @@ def draw_curve(axes: Any, rows: Sequence[Row], title: str) -> None:
     for key, style in (("best", "-"), ("mean", "--"), ("median", ":")):
         axes.plot(generations, [_value(r, key) for r in rows], style, label=key)
     _generation_axis(axes)
-    axes.set_ylabel("speed (m/s)")
+    axes.set_ylabel(ylabel)
     axes.set_title(title)
     axes.legend(frameon=False)
 
 
-def draw_population(axes: Any, individuals: Sequence[Row], title: str) -> None:
+def draw_population(axes: Any, individuals: Sequence[Row], title: str, ylabel: str = SPEED) -> None:
     ok = [(i["generation"], i["fitness"]) for i in individuals if i.get("fitness") is not None]
     failed = [i["generation"] for i in individuals if i.get("fitness") is None]
     if ok:
@@ -85,7 +105,7 @@ def draw_population(axes: Any, individuals: Sequence[Row], title: str) -> None:
             label=f"failed ({len(failed)})",
         )
     _generation_axis(axes)
-    axes.set_ylabel("speed (m/s)")
+    axes.set_ylabel(ylabel)
     axes.set_title(title)
     axes.legend(frameon=False, loc="lower right")
 
@@ -98,22 +118,24 @@ def draw_diversity(axes: Any, rows: Sequence[Row], title: str) -> None:
     axes.set_title(title)
 
 
-def _single(draw: Any, data: Sequence[Row], title: str, height: float = 3.4) -> Figure:
+def _single(draw: Any, data: Sequence[Row], title: str, height: float = 3.4, **how: Any) -> Figure:
     plt = pyplot()
     figure, axes = plt.subplots(figsize=(5.5, height))
-    draw(axes, data, title)
+    draw(axes, data, title, **how)
     figure.tight_layout()
     return figure
 
 
-def curve_figure(rows: Sequence[Row], title: str = "learning curve") -> Figure:
-    """Figure 4(b): best, mean, median and best so far per generation (m/s)."""
-    return _single(draw_curve, rows, title)
+def curve_figure(rows: Sequence[Row], title: str = "learning curve", ylabel: str = SPEED) -> Figure:
+    """Figure 4(b): best, mean, median and best so far per generation (fitness: `ylabel`)."""
+    return _single(draw_curve, rows, title, ylabel=ylabel)
 
 
-def population_figure(individuals: Sequence[Row], title: str = "population") -> Figure:
-    """Figure 4(c): every individual's speed per generation; failed ones as red crosses at 0."""
-    return _single(draw_population, individuals, title)
+def population_figure(
+    individuals: Sequence[Row], title: str = "population", ylabel: str = SPEED
+) -> Figure:
+    """Figure 4(c): every individual's fitness per generation; failed ones as red crosses at 0."""
+    return _single(draw_population, individuals, title, ylabel=ylabel)
 
 
 def diversity_figure(rows: Sequence[Row], title: str = "diversity") -> Figure:
@@ -121,13 +143,15 @@ def diversity_figure(rows: Sequence[Row], title: str = "diversity") -> Figure:
     return _single(draw_diversity, rows, title, height=3.0)
 
 
-def panel_figure(curve: Sequence[Row], individuals: Sequence[Row], title: str = "") -> Figure:
+def panel_figure(
+    curve: Sequence[Row], individuals: Sequence[Row], title: str = "", ylabel: str = SPEED
+) -> Figure:
     """All three, stacked, for one run: Figure 4(b)-(d) in one file."""
     plt = pyplot()
     figure, axes = plt.subplots(3, 1, figsize=(6.0, 9.0), sharex=True)
     suffix = f": {title}" if title else ""
-    draw_curve(axes[0], curve, "learning curve" + suffix)
-    draw_population(axes[1], individuals, "population" + suffix)
+    draw_curve(axes[0], curve, "learning curve" + suffix, ylabel)
+    draw_population(axes[1], individuals, "population" + suffix, ylabel)
     draw_diversity(axes[2], curve, "diversity" + suffix)
     for upper in axes[:2]:
         upper.set_xlabel("")
@@ -149,12 +173,16 @@ def save(figure: Figure, path: Path) -> Path:
 
 
 def run_figures(
-    curve: Sequence[Row], individuals: Sequence[Row], out: Path, title: str = ""
+    curve: Sequence[Row],
+    individuals: Sequence[Row],
+    out: Path,
+    title: str = "",
+    ylabel: str = SPEED,
 ) -> list[Path]:
     """The three figures of one run into `out`: curve.png, population.png, diversity.png."""
     suffix = f": {title}" if title else ""
     return [
-        save(curve_figure(curve, "learning curve" + suffix), out / "curve.png"),
-        save(population_figure(individuals, "population" + suffix), out / "population.png"),
+        save(curve_figure(curve, "learning curve" + suffix, ylabel), out / "curve.png"),
+        save(population_figure(individuals, "population" + suffix, ylabel), out / "population.png"),
         save(diversity_figure(curve, "diversity" + suffix), out / "diversity.png"),
     ]

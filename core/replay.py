@@ -13,6 +13,7 @@ from softevo.core.limits import MAX_REPLAY_POSITIONS
 from softevo.core.nulls import to_null
 from softevo.core.robot import Robot, build_mechanics
 from softevo.core.robot_file import robot_to_json
+from softevo.core.terrain import mesh
 
 
 def record_every(robot: Robot, masses: int, fps: float, max_positions: int) -> int:
@@ -38,16 +39,40 @@ def replay_json(robot_file: dict[str, Any], fps: float, max_positions: int) -> b
 def replay_frames(
     robot: Robot, fps: float, max_positions: int = MAX_REPLAY_POSITIONS
 ) -> dict[str, Any]:
-    """The robot's speed, the frame rate used, the robot file and its trajectory (JSON)."""
+    """The robot's speed and other measures, the frame rate used, the robot file, the terrain
+    under its path and its trajectory (JSON)."""
     from softevo.core.physics import simulate  # the physics loads only when a replay is asked
 
     mechanics = build_mechanics(robot)
     every = record_every(robot, mechanics.n_masses, fps, max_positions)
     result, trajectory = simulate(mechanics, record_every=every)
     assert trajectory is not None
+    measures = result.to_json()
+    frames = trajectory.frames
     return {
         "speed": to_null(result.speed),
+        "measures": {key: measures[key] for key in MEASURES},
         "fps": 1.0 / (every * robot.sim.dt),
         "robot": robot_to_json(robot),
+        "terrain": terrain_view(robot.sim.terrain, frames),
         **trajectory.to_json(),
     }
+
+
+#: What a replay reports of its simulation besides speed.
+MEASURES = ("forward_speed", "climb_rate", "energy", "cost_of_transport")
+
+
+def terrain_view(terrain: Any, frames: Any) -> dict[str, Any]:
+    """The terrain under the robot's path, MARGIN metres around it, for the viewer to draw."""
+    low, high = frames.min(axis=(0, 1)), frames.max(axis=(0, 1))
+    x_range = (math.floor(low[0]) - MARGIN, math.ceil(high[0]) + MARGIN)
+    y_range = (math.floor(low[1]) - MARGIN, math.ceil(high[1]) + MARGIN)
+    view: dict[str, Any] = terrain.model_dump()
+    if terrain.kind != "flat":
+        view["mesh"] = mesh(terrain, x_range, y_range, MESH_STEP)
+    return view
+
+
+#: Metres of terrain drawn around the robot's path, and the grid's spacing (m).
+MARGIN, MESH_STEP = 4, 0.1

@@ -153,3 +153,31 @@ Terrain = Annotated[AnyTerrain, Field(discriminator="kind")]
 def kernel_params(terrain: AnyTerrain) -> tuple[int, np.ndarray]:
     """The kernels' terrain arguments: kind code and a float64 parameter array."""
     return terrain.code, np.array(terrain.params(), dtype=np.float64)
+
+
+def edges(terrain: AnyTerrain, low: float, high: float) -> list[float]:
+    """x of the vertical faces (risers, bar faces) between `low` and `high`."""
+    if isinstance(terrain, Steps):
+        first = max(1, math.ceil(low / terrain.depth))
+        return [i * terrain.depth for i in range(first, math.floor(high / terrain.depth) + 1)]
+    if isinstance(terrain, Hurdles):
+        first = max(1, math.floor(low / terrain.spacing))
+        bars = range(first, math.floor(high / terrain.spacing) + 1)
+        return [x for i in bars for x in (i * terrain.spacing, i * terrain.spacing + terrain.width)]
+    return []
+
+
+def mesh(
+    terrain: AnyTerrain, x_range: tuple[float, float], y_range: tuple[float, float], step: float
+) -> dict[str, list]:
+    """The surface over a rectangle as a height grid for a viewer: x (m) every `step` and on
+    both sides of every vertical face (so risers and bars are drawn upright), y every `step`
+    (two rows for the kinds that do not vary along y), z [len(y)][len(x)] (m, 3 decimals)."""
+    (x0, x1), (y0, y1) = x_range, y_range
+    xs = set(np.arange(x0, x1 + step, step).round(6).tolist())
+    for x in edges(terrain, x0, x1):  # just before a face, and on it: the face is upright
+        xs.update((round(x - 1e-6, 7), x))
+    x = np.array(sorted(xs))
+    y = np.arange(y0, y1 + step, step) if isinstance(terrain, Rough) else np.array([y0, y1])
+    z = terrain.surface(x[None, :], y[:, None])
+    return {"x": x.round(6).tolist(), "y": y.round(6).tolist(), "z": z.round(3).tolist()}

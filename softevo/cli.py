@@ -41,6 +41,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         robot = load_robot(args.robot)
         if args.duration is not None:
             robot = with_sim(robot, duration=args.duration)
+        if args.terrain is not None:
+            robot = with_sim(robot, terrain=args.terrain)
     except (RobotFileError, ValueError) as error:
         raise CommandError(f"{args.robot}: {error}") from None
     record_every = max(1, round(1.0 / (args.fps * robot.sim.dt))) if args.trajectory else 0
@@ -78,14 +80,21 @@ def build_parser() -> argparse.ArgumentParser:
         help="simulate one robot file and print its result as JSON",
         description=(
             "Simulate ROBOT.json (format softevo.robot/1) and print one JSON object: masses, "
-            "springs, steps, com_start, com_end, distance, speed (m/s), wall_seconds, stable. "
-            "Exits 1 if the file is invalid or the simulation blew up."
+            "springs, steps, com_start, com_end, distance (m), speed (m/s), forward_speed "
+            "(m/s along +x), climb_rate (m/s), energy (J of actuator work), cost_of_transport "
+            "(energy / (mass x g x distance)), wall_seconds, stable; all measured from "
+            "sim.settle_time on. Exits 1 if the file is invalid or the simulation blew up."
         ),
     )
     simulate.add_argument("robot", metavar="ROBOT.json", help="robot file")
     simulate.add_argument(
         "--duration", type=_positive_float, metavar="S", help="simulated seconds (overrides sim)"
     )
+    simulate.add_argument(
+        "--terrain", type=run_command.terrain_json, metavar="JSON",
+        help='simulate on this ground instead, e.g. \'{"kind": "steps", "height": 0.2, '
+        '"depth": 4.5}\' (docs/tasks.md)',
+    )  # fmt: skip
     simulate.add_argument(
         "--trajectory", metavar="OUT.json", help="also write mass positions over time to this file"
     )

@@ -73,12 +73,14 @@ def plot_command(args: argparse.Namespace) -> int:
         args.parser.exit(1, f"softevo plot: error: {error}\n")
     if not curve:
         args.parser.exit(1, f"softevo plot: error: {args.run} has no committed generation yet\n")
-    shape = config.get("shape")
-    title = f"{'x'.join(map(str, shape))}, seed {config.get('seed')}" if shape else ""
+    title = figures.run_title(config)
+    ylabel = figures.fitness_label(config)
     figure = {
-        "all": lambda: figures.panel_figure(curve, individuals, title),
-        "curve": lambda: figures.curve_figure(curve, f"learning curve: {title}"),
-        "population": lambda: figures.population_figure(individuals, f"population: {title}"),
+        "all": lambda: figures.panel_figure(curve, individuals, title, ylabel),
+        "curve": lambda: figures.curve_figure(curve, f"learning curve: {title}", ylabel),
+        "population": lambda: figures.population_figure(
+            individuals, f"population: {title}", ylabel
+        ),
         "diversity": lambda: figures.diversity_figure(curve, f"diversity: {title}"),
     }[args.kind]()
     out = Path(args.out)

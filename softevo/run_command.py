@@ -14,6 +14,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from softevo.core import figures
 from softevo.core.config import PRESET_DESCRIPTIONS, PRESETS, ConfigError, resolve
 from softevo.core.evolution import Evolution
+from softevo.core.objectives import OBJECTIVES
 from softevo.results import append_population, read_results, summary, write_results
 
 
@@ -39,6 +40,15 @@ def add_parser(commands: Any) -> None:
     run.add_argument("--generations", type=int, metavar="G")
     run.add_argument("--duration", type=float, metavar="S", help="simulated seconds per robot")
     run.add_argument(
+        "--objective", choices=list(OBJECTIVES),
+        help="fitness: " + "; ".join(f"{k}: {v[0]} ({v[1]})" for k, v in OBJECTIVES.items()),
+    )  # fmt: skip
+    run.add_argument(
+        "--terrain", type=terrain_json, metavar="JSON",
+        help='the ground, e.g. \'{"kind": "slope", "angle_deg": 10}\' (docs/tasks.md); the '
+        "task-* presets come with theirs",
+    )  # fmt: skip
+    run.add_argument(
         "--workers", type=int, metavar="W", help="processes (default: one per core; 1 = serial)"
     )
     run.add_argument("--out", metavar="DIR", help="output folder (softevo-runs/PRESET-seedN)")
@@ -51,9 +61,23 @@ def _request(args: argparse.Namespace) -> dict[str, Any]:
     for name in ("shape", "encoding", "population", "generations"):
         if getattr(args, name) is not None:
             request[name] = getattr(args, name)
-    if args.duration is not None:
-        request["sim"] = {"duration": args.duration}
+    if args.objective is not None:
+        request["objective"] = args.objective
+    sim = {"duration": args.duration, "terrain": args.terrain}
+    if any(value is not None for value in sim.values()):
+        request["sim"] = {key: value for key, value in sim.items() if value is not None}
     return request
+
+
+def terrain_json(text: str) -> dict[str, Any]:
+    """`--terrain`: a JSON object (checked with the rest of the config)."""
+    try:
+        value = json.loads(text)
+    except json.JSONDecodeError as error:
+        raise argparse.ArgumentTypeError(f"not JSON: {error.msg}") from None
+    if not isinstance(value, dict):
+        raise argparse.ArgumentTypeError('expected an object like {"kind": "flat"}')
+    return value
 
 
 def _writable(args: argparse.Namespace, out: Path) -> Path:
@@ -85,7 +109,10 @@ def run_command(args: argparse.Namespace) -> int:
         TextColumn("generation"),
         MofNCompleteColumn(),
         BarColumn(),
-        TextColumn("best {task.fields[best]} m/s  {task.fields[rate]} eval/s"),
+        TextColumn(
+            f"best {{task.fields[best]}} {OBJECTIVES[config.objective][1]}"
+            "  {task.fields[rate]} eval/s"
+        ),
         TimeRemainingColumn(),
     )
     try:
@@ -115,8 +142,10 @@ def run_command(args: argparse.Namespace) -> int:
         evaluator.close()
     write_results(out, evolution)
     _, curve, individuals = read_results(out)
-    title = f"{'x'.join(map(str, config.shape))}, seed {config.seed}"
-    figures.run_figures(curve, individuals, out, title)
+    as_stored = config.to_json()
+    figures.run_figures(
+        curve, individuals, out, figures.run_title(as_stored), figures.fitness_label(as_stored)
+    )
     _print_summary(args, evolution, out)
     return 0
 

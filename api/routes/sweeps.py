@@ -1,4 +1,5 @@
-"""`/sweeps`: one base experiment over many bounding boxes and seeds (the paper's Figure 4a)."""
+"""`/sweeps`: one base experiment over many bounding boxes and seeds (the paper's Figure 4a), or
+over the task presets and seeds (a benchmark suite in one request)."""
 
 from __future__ import annotations
 
@@ -28,16 +29,19 @@ def _status(statuses: list[str]) -> str:
 
 def sweep_public(db: Database, sweep_id: int) -> SweepPublic:
     sweep, runs = store.get_sweep(db, sweep_id)
-    boxes: dict[tuple[int, int, int], list[store.RunRecord]] = {}
+    by_task = bool(sweep["request"].get("tasks"))
+    boxes: dict[tuple[str | None, tuple[int, int, int]], list[store.RunRecord]] = {}
     for run in runs:
-        boxes.setdefault(tuple(run.config["shape"]), []).append(run)  # type: ignore[arg-type]
+        key = (run.preset if by_task else None, tuple(run.config["shape"]))
+        boxes.setdefault(key, []).append(run)  # type: ignore[arg-type]
     out = []
-    for shape, members in boxes.items():
+    for (task, shape), members in boxes.items():
         best = [r.best_fitness for r in members if r.status == RunStatus.COMPLETED]
         best = [b for b in best if b is not None]
         out.append(
             SweepBox(
                 shape=shape,
+                task=task,
                 run_ids=[r.id for r in members],
                 statuses=[r.status for r in members],
                 completed=sum(r.status == RunStatus.COMPLETED for r in members),
@@ -69,27 +73,41 @@ def create_sweep(
     coordinator: CoordinatorDep,
     response: Response,
 ) -> SweepPublic:
-    """Queue one run per (bounding box, seed); every config is checked before any is queued."""
-    request: dict[str, Any] = body.model_dump(exclude_unset=True, exclude={"shapes", "seeds"})
-    shapes, seeds = (
-        list(dict.fromkeys(tuple(s) for s in body.shapes)),
-        list(dict.fromkeys(body.seeds)),
+    """Queue one run per (bounding box, seed), or per (task, box, seed) with `tasks`; every
+    config is checked before any is queued."""
+    given = body.model_fields_set
+    request: dict[str, Any] = body.model_dump(
+        exclude_unset=True, exclude={"shapes", "seeds", "tasks"}
     )
-    if len(shapes) * len(seeds) > settings.limits.max_sweep_runs:
-        raise RequestError(["seeds"], f"{len(shapes)} boxes x {len(seeds)} seeds is over the "
-                           f"limit of {settings.limits.max_sweep_runs} runs per sweep "
+    if body.tasks and "preset" in given:
+        raise RequestError(["preset"], "give tasks or a preset, not both: each task is a preset")
+    tasks: list[str | None] = list(dict.fromkeys(body.tasks)) if body.tasks else [None]
+    shapes: list[tuple[int, int, int] | None] = (
+        list(dict.fromkeys(tuple(s) for s in body.shapes))
+        if not body.tasks or "shapes" in given
+        else [None]  # each task's own box
+    )
+    seeds = list(dict.fromkeys(body.seeds))
+    count = len(tasks) * len(shapes) * len(seeds)
+    if count > settings.limits.max_sweep_runs:
+        sizes = f"{len(tasks)} tasks x " if body.tasks else ""
+        raise RequestError(["seeds"], f"{sizes}{len(shapes)} boxes x {len(seeds)} seeds is over "
+                           f"the limit of {settings.limits.max_sweep_runs} runs per sweep "
                            "(SOFTEVO_MAX_SWEEP_RUNS)")  # fmt: skip
     configs = []
-    for i, shape in enumerate(shapes):
-        for seed in seeds:
-            configs.append(
-                run_config(
-                    {**request, "shape": shape, "seed": seed}, settings.limits, ("shapes", str(i))
-                )
-            )
+    for t, task in enumerate(tasks):
+        for i, shape in enumerate(shapes):
+            where = ("tasks", str(t)) if shape is None else ("shapes", str(i))
+            for seed in seeds:
+                one = {**request, "seed": seed}
+                one.update({} if task is None else {"preset": task})
+                one.update({} if shape is None else {"shape": shape})
+                configs.append(run_config(one, settings.limits, where))
     check_budget(configs, settings.limits, ["seeds"])  # the sweep's runs together
     stored = body.model_dump(mode="json", exclude_unset=True)
-    stored.update(shapes=[list(s) for s in shapes], seeds=seeds)
+    stored.update(seeds=seeds)
+    if shapes != [None]:
+        stored.update(shapes=[list(s) for s in shapes if s is not None])
     sweep_id, _ = store.create_sweep(db, stored, configs, settings.limits.max_queued)
     coordinator.wake()
     response.headers["Location"] = f"/sweeps/{sweep_id}"
@@ -98,5 +116,6 @@ def create_sweep(
 
 @router.get("/{sweep_id}", responses={404: {"model": Message}})
 def get_sweep(sweep_id: SweepId, db: DatabaseDep) -> SweepPublic:
-    """Per box: best speed (mean, spread, min, max over completed seeds) and the run ids."""
+    """Per box (and task): best fitness (mean, spread, min, max over completed seeds) and the run
+    ids."""
     return sweep_public(db, sweep_id)

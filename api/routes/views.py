@@ -60,13 +60,14 @@ def get_figure(
     run = store.get_run(db, run_id)
     items = store.list_individuals(db, run, None, 0, 10**9)[0] if kind == "population" else []
     rows = store.curve(db, run_id) if kind != "population" else []
-    title = f"run {run_id} ({'x'.join(map(str, run.config['shape']))}, seed {run.seed})"
+    title = figures.run_title(run.config, f"run {run_id}")
+    ylabel = figures.fitness_label(run.config)
     buffer = io.BytesIO()
     with _FIGURES:
         if kind == "population":
-            figure = figures.population_figure(items, f"population: {title}")
+            figure = figures.population_figure(items, f"population: {title}", ylabel)
         elif kind == "curve":
-            figure = figures.curve_figure(rows, f"learning curve: {title}")
+            figure = figures.curve_figure(rows, f"learning curve: {title}", ylabel)
         else:
             figure = figures.diversity_figure(rows, f"diversity: {title}")
         figures.write(figure, buffer)

@@ -81,3 +81,21 @@ export function chart(id, title, options, data, parent) {
   softevo.charts[id] = plot;
   return plot;
 }
+
+// What a run's fitness is (its config's objective; speed when absent), with its unit.
+const OBJECTIVES = {
+  speed: ["speed", "m/s"], forward: ["forward speed", "m/s"], climb: ["climb rate", "m/s"], efficiency: ["efficiency", "m/J"],
+};
+export function objective(config) {
+  const [name, unit] = OBJECTIVES[(config && config.objective) || "speed"] || OBJECTIVES.speed;
+  return { name, unit, label: `${name} (${unit})` };
+}
+
+// "flat", or "steps (height 0.2, depth 4.5)": a run's terrain in a few words.
+export function terrainText(config) {
+  const terrain = (config && config.sim && config.sim.terrain) || { kind: "flat" };
+  const { kind, ...rest } = terrain;
+  delete rest.mesh;
+  const parts = Object.entries(rest).map(([key, value]) => `${key} ${value}`);
+  return parts.length ? `${kind} (${parts.join(", ")})` : kind;
+}

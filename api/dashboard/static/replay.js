@@ -1,10 +1,39 @@
 // The 3D replay of one robot (three.js): springs coloured by material and actuation phase.
 import * as THREE from "three";
 import { OrbitControls } from "three/addons/OrbitControls.js";
-import { api, fmt, h, softevo } from "./api.js";
+import { api, fmt, h, softevo, terrainText } from "./api.js";
 
 const PASSIVE_SOFT = new THREE.Color("#9bc59d"), PASSIVE_HARD = new THREE.Color("#4a4f55");
 const IN_PHASE = new THREE.Color("#d1495b"), ANTI_PHASE = new THREE.Color("#2f6fb5");
+
+// The terrain's surface from the replay's height grid (x, y, z[y][x]): shaded by height, with
+// its grid lines, so slopes, steps, bars and bumps read at a glance.
+function terrainMesh({ x, y, z }) {
+  const geometry = new THREE.BufferGeometry();
+  const vertices = new Float32Array(x.length * y.length * 3);
+  const colours = new Float32Array(x.length * y.length * 3);
+  const flat = z.flat(), low = Math.min(...flat), high = Math.max(...flat);
+  const base = new THREE.Color("#d5dce3"), top = new THREE.Color("#8fa3b5");
+  y.forEach((yv, j) => x.forEach((xv, i) => {
+    const k = j * x.length + i;
+    vertices.set([xv, yv, z[j][i] - 0.002], k * 3);
+    const c = base.clone().lerp(top, high > low ? (z[j][i] - low) / (high - low) : 0);
+    colours.set([c.r, c.g, c.b], k * 3);
+  }));
+  const index = [];
+  for (let j = 0; j + 1 < y.length; j++) {
+    for (let i = 0; i + 1 < x.length; i++) {
+      const a = j * x.length + i, b = a + 1, c = a + x.length, d = c + 1;
+      index.push(a, b, d, a, d, c);
+    }
+  }
+  geometry.setIndex(index);
+  geometry.setAttribute("position", new THREE.BufferAttribute(vertices, 3));
+  geometry.setAttribute("color", new THREE.BufferAttribute(colours, 3));
+  const solid = new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({ vertexColors: true, side: THREE.DoubleSide }));
+  const lines = new THREE.LineSegments(new THREE.WireframeGeometry(geometry), new THREE.LineBasicMaterial({ color: 0xaab4be, transparent: true, opacity: 0.25 }));
+  return [solid, lines];
+}
 
 export class Replay {
   constructor(panel) {
@@ -27,6 +56,10 @@ export class Replay {
     const data = this.data;
     this.dispose();
     const title = h("h3", {}, "Replay: ", label, data.speed !== null ? ` · ${fmt(data.speed)} m/s` : " · unstable");
+    const measures = data.measures || {};
+    const terrain = terrainText({ sim: { terrain: data.terrain } });
+    const facts = h("p", { class: "muted", id: "replay-measures" }, `terrain: ${terrain} · forward ${fmt(measures.forward_speed)} m/s · climb ${fmt(measures.climb_rate)} m/s`
+      + (measures.energy !== null && measures.energy !== undefined ? ` · actuator work ${fmt(measures.energy)} J · cost of transport ${fmt(measures.cost_of_transport)}` : ""));
     const holder = h("div", { id: "replay-canvas" });
     const play = h("button", { id: "replay-play" }, "Pause");
     const slider = h("input", { type: "range", min: 0, max: data.frames.length - 1, value: 0, id: "replay-slider" });
@@ -37,7 +70,7 @@ export class Replay {
       h("span", { class: "legend-swatch", style: "background:#4a4f55" }), "hard",
       h("span", { class: "legend-swatch", style: "background:#d1495b" }), "actuated (sine)",
       h("span", { class: "legend-swatch", style: "background:#2f6fb5" }), "actuated (anti-phase)");
-    this.panel.replaceChildren(title, holder, h("div", { class: "controls" }, play, slider, speed, clock), legend);
+    this.panel.replaceChildren(title, facts, holder, h("div", { class: "controls" }, play, slider, speed, clock), legend);
 
     const state = this.state;
     Object.assign(state, { frame: 0, frames: data.frames.length, time: 0, playing: true, label });
@@ -65,7 +98,8 @@ export class Replay {
     const ground = new THREE.Mesh(new THREE.PlaneGeometry(60, 60), new THREE.MeshBasicMaterial({ color: "#e3e8ed" }));
     ground.position.z = -0.002;  // the ground (z = 0) under the grid lines
     scene.background = new THREE.Color("#fbfcfd");
-    scene.add(ground, grid, new THREE.AmbientLight(0xffffff, 1.2));
+    const surface = data.terrain && data.terrain.mesh ? terrainMesh(data.terrain.mesh) : null;
+    scene.add(...(surface ? surface : [ground, grid]), new THREE.AmbientLight(0xffffff, 1.2));
     const geometry = new THREE.BufferGeometry();
     const positions = new Float32Array(springs.length * 6);
     const colours = new Float32Array(springs.length * 6);

@@ -1,5 +1,5 @@
 // One run, live: its curve, population dot plot, diversity and the 3D replay of the best robot.
-import { CURVE_SERIES, GENERATION_AXIS, api, box, chart, fmt, h, onLeave, progressBar, softevo, status, view } from "./api.js";
+import { CURVE_SERIES, GENERATION_AXIS, api, box, chart, fmt, h, objective, onLeave, progressBar, softevo, status, terrainText, view } from "./api.js";
 import { Replay } from "./replay.js";
 import { cancelButton } from "./runs.js";
 
@@ -8,12 +8,14 @@ export async function runView(runId) {
   softevo.replay = softevo.dots = softevo.failedDots = null;  // nothing of the last view's
   let run = await api(`/runs/${runId}`);
   const population = run.config.population;
+  const fitness = objective(run.config);
   const summary = h("div", { id: "summary" });
   const charts = h("div", { class: "grid" });
   const replayPanel = h("div", { class: "panel", id: "replay" });
   const settings = h("pre", { class: "settings" }, JSON.stringify(run.config, null, 2));
   view.replaceChildren(
     h("h2", {}, `Run #${runId}`, " ", h("span", { class: "muted" }, `${run.preset || "custom"}, ${box(run.config.shape)}, seed ${run.seed}`)),
+    h("p", { class: "muted", id: "task" }, `task: ${terrainText(run.config)} terrain, fitness = ${fitness.label}`),
     summary, charts,
     h("div", { class: "grid" }, replayPanel,
       h("div", { class: "panel" }, h("h3", {}, "Settings"), settings)));
@@ -34,7 +36,7 @@ export async function runView(runId) {
   const showSummary = () => {
     summaryText.replaceChildren(
       status(run.status), " ", progressBar(run.progress.generation, run.progress.generations),
-      ` best ${fmt(run.progress.best_fitness)} m/s`,
+      ` best ${fmt(run.progress.best_fitness)} ${fitness.unit}`,
       run.progress.best_generation !== null ? ` (generation ${run.progress.best_generation})` : "",
       `, ${run.progress.evaluations} simulations, ${run.progress.saved} from the cache`,
       run.progress.eta_seconds ? `, about ${Math.round(run.progress.eta_seconds)} s left` : "");
@@ -61,9 +63,9 @@ export async function runView(runId) {
   await loadGenerations();
 
   const curveData = () => [curve.map((r) => r.generation), ...CURVE_SERIES.map((s) => curve.map((r) => r[s.key]))];
-  const curvePlot = chart("curve", "Learning curve (m/s)", {
+  const curvePlot = chart("curve", `Learning curve: ${fitness.label}`, {
     scales: { x: { time: false } },
-    axes: [GENERATION_AXIS, { label: "speed (m/s)", size: 60 }],
+    axes: [GENERATION_AXIS, { label: fitness.label, size: 60 }],
     series: [{ label: "generation" }, ...CURVE_SERIES.map((s) => ({ label: s.label, stroke: s.stroke, width: s.width || 1.5, dash: s.dash }))],
   }, curveData(), charts);
 
@@ -83,9 +85,9 @@ export async function runView(runId) {
   const dotPlot = chart("population", "Population: every individual (click one to replay it)", {
     scales: { x: { time: false, range: (u, min, max) => [Math.round(min) - 0.6, Math.round(max) + 0.6] } },
     cursor: { drag: { x: false, y: false } },
-    axes: [GENERATION_AXIS, { label: "speed (m/s)", size: 60 }],
+    axes: [GENERATION_AXIS, { label: fitness.label, size: 60 }],
     series: [{ label: "generation", value: (u, v) => (v === null ? "–" : Math.round(v)) },
-      { label: "speed", stroke: "#2f6fb5", paths: () => null, points: { show: true, size: 4, fill: "#2f6fb5" } },
+      { label: fitness.name, stroke: "#2f6fb5", paths: () => null, points: { show: true, size: 4, fill: "#2f6fb5" } },
       { label: "failed", stroke: "#c0392b", paths: () => null, points: { show: true, size: 6, fill: "#c0392b" } }],
   }, dotData(), charts);
   // capture phase on the root: uPlot stops the click's propagation on its plotting area
@@ -102,7 +104,7 @@ export async function runView(runId) {
     if (!best) return;
     replay.best = null;  // a picked individual stays on screen while the run goes on
     replay.load(`/runs/${runId}/individuals/${best.id}/replay`,
-      () => `individual ${best.id} (generation ${best.generation}, ${best.operator}, ${best.fitness === null ? "failed" : `${fmt(best.fitness)} m/s`})`)
+      () => `individual ${best.id} (generation ${best.generation}, ${best.operator}, ${best.fitness === null ? "failed" : `${fmt(best.fitness)} ${fitness.unit}`})`)
       .catch((error) => replayPanel.append(h("p", { class: "error" }, error.message)));
   }, true);
 

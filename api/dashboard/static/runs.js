@@ -1,5 +1,5 @@
 // The list of runs: status, progress, best speed; start one from a preset, cancel one.
-import { api, box, fmt, h, onLeave, progressBar, softevo, status, view } from "./api.js";
+import { api, box, fmt, h, objective, onLeave, progressBar, softevo, status, view } from "./api.js";
 
 export async function runsView() {
   softevo.view = "runs";
@@ -38,12 +38,12 @@ export async function runsView() {
   async function refresh() {
     const page = await api("/runs?limit=100");
     table.replaceChildren(
-      h("tr", {}, ["run", "status", "progress", "best speed (m/s)", "preset", "box", "seed", "sweep", ""].map((t) => h("th", {}, t))),
+      h("tr", {}, ["run", "status", "progress", "best fitness", "preset", "box", "seed", "sweep", ""].map((t) => h("th", {}, t))),
       ...page.items.map((run) => h("tr", { "data-run": run.id },
         h("td", {}, h("a", { href: `#/runs/${run.id}` }, `#${run.id}`)),
         h("td", {}, status(run.status)),
         h("td", {}, progressBar(run.progress.generation, run.progress.generations)),
-        h("td", { class: "num" }, fmt(run.progress.best_fitness)),
+        h("td", { class: "num" }, `${fmt(run.progress.best_fitness)} ${objective(run.config).unit}`),
         h("td", {}, run.preset || "–"),
         h("td", {}, box(run.config.shape)),
         h("td", { class: "num" }, run.seed),
