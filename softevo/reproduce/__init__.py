@@ -32,6 +32,7 @@ from softevo.reproduce.experiments import Experiments, wall_seconds
 from softevo.reproduce.figures import write_figures
 from softevo.reproduce.plan import FULL, QUICK
 from softevo.reproduce.tables import fmt, write_tables
+from softevo.reproduce.tasks import run_suite, write_suite
 
 
 def add_parser(commands: Any) -> None:
@@ -47,7 +48,14 @@ def add_parser(commands: Any) -> None:
         ),
     )
     parser.add_argument("--quick", action="store_true", help="tiny settings, same code path")
-    parser.add_argument("--out", default="docs/experiments", help="output folder")
+    parser.add_argument(
+        "--tasks", action="store_true",
+        help="run the task suite instead (task-flat, -slope, -stairs, -rough, -hurdles x seeds "
+        "1-3, the GA against random search on its budget): tasks.csv, tasks.md, tasks.png",
+    )  # fmt: skip
+    parser.add_argument(
+        "--out", help="output folder (docs/experiments; with --tasks docs/experiments/tasks)"
+    )
     parser.add_argument(
         "--url", help="a running service (token from SOFTEVO_API_TOKEN); default: start one"
     )
@@ -65,7 +73,7 @@ def add_parser(commands: Any) -> None:
 
 def reproduce_command(args: argparse.Namespace) -> int:
     plan = QUICK if args.quick else FULL
-    out = Path(args.out)
+    out = Path(args.out or ("docs/experiments/tasks" if args.tasks else "docs/experiments"))
     try:
         out.mkdir(parents=True, exist_ok=True)
         (out / ".write-test").touch()
@@ -74,6 +82,8 @@ def reproduce_command(args: argparse.Namespace) -> int:
         args.parser.error(f"--out {out}: cannot write there ({error.strerror})")
     started = time.monotonic()
     flags = " --quick" if args.quick else ""
+    if args.tasks:
+        return _task_suite(args, out, started)
     print(f"softevo reproduce{flags}: results in {out}/", flush=True)
     phase1 = breathing_cube(out, args.quick)
     try:
@@ -92,6 +102,24 @@ def reproduce_command(args: argparse.Namespace) -> int:
     notes = _notes(args, out, experiments, phase1, figure4, sweep, wall)
     write_tables(rows, out, notes, champions_table(longer))
     print(f"done in {wall:.0f} s: {out / 'results.md'}")
+    return 0
+
+
+def _task_suite(args: argparse.Namespace, out: Path, started: float) -> int:
+    flags = " --quick" if args.quick else ""
+    command = f"softevo reproduce --tasks{flags} --out {out}" + (
+        f" --url {args.url}" if args.url else ""
+    )
+    print(f"{command}: results in {out}/", flush=True)
+    try:
+        with service(args.url, out, args.workers, args.resume) as client:
+            rows = run_suite(client, args.quick)
+    except httpx.HTTPError as error:
+        where = args.url or "the private service"
+        raise SystemExit(f"softevo reproduce: error: {where}: {error}") from None
+    wall = time.monotonic() - started
+    write_suite(rows, out, command, wall)
+    print(f"done in {wall:.0f} s: {out / 'tasks.md'}")
     return 0
 
 
