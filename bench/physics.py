@@ -38,6 +38,7 @@ import numpy as np
 from softevo.core.physics import kernels, simulate, simulate_batch
 from softevo.core.robot import Mechanics, VoxelRobot, build_mechanics
 from softevo.core.settings import SimSettings
+from softevo.core.tasks import TASKS
 
 ROOT = Path(__file__).resolve().parent.parent
 TARGETS = {"batch_per_core": 300e6, "single": 150e6}
@@ -54,9 +55,31 @@ def cpu_model() -> str:
     return platform.machine()
 
 
-def solid_block(duration: float) -> Mechanics:
-    sim = SimSettings(duration=duration, settle_time=min(1.0, duration / 2))
+def solid_block(duration: float, terrain: dict | None = None) -> Mechanics:
+    sim = SimSettings.model_validate(
+        {"duration": duration, "settle_time": min(1.0, duration / 2),
+         **({"terrain": terrain} if terrain else {})}
+    )  # fmt: skip
     return build_mechanics(VoxelRobot((4, 4, 4), ("hard",) * 64, sim=sim))
+
+
+def terrain_rates(duration: float, repeats: int, n_batch: int) -> dict[str, float]:
+    """Spring updates per second of `n_batch` blocks on each task's terrain, 1 thread, the
+    terrains interleaved round by round so a drifting machine hits them alike."""
+    blocks = {"flat": solid_block(duration)}
+    for name, (_, terrain, _) in TASKS.items():
+        if terrain["kind"] != "flat":
+            blocks[name.removeprefix("task-")] = solid_block(duration, terrain)
+    times: dict[str, list[float]] = {name: [] for name in blocks}
+    for block in blocks.values():
+        simulate_batch([block] * 2)  # compiled, and every terrain's path warm
+    for _ in range(repeats):
+        for name, block in blocks.items():
+            started = time.perf_counter()
+            simulate_batch([block] * n_batch)
+            times[name].append(time.perf_counter() - started)
+    updates = blocks["flat"].n_springs * blocks["flat"].sim.n_steps * n_batch
+    return {name: updates / statistics.median(t) for name, t in times.items()}
 
 
 LAST: dict = {}  # the last result of each timed run, by label, to check bit-identity
@@ -212,6 +235,13 @@ def main() -> None:
             seconds = median_seconds(lambda n=lanes: simulate_batch(batch, lanes=n), 3)
             rate_row(f"lanes = {lanes}", one_step * n_batch, seconds, 1)
 
+    terrains = terrain_rates(duration, repeats, n_batch)
+    print(f"\n  simulate_batch, {n_batch} blocks, 1 thread, on each task's terrain "
+          "(interleaved)")  # fmt: skip
+    print(f"  {'terrain':<44}{'M/s':>12}{'/ flat':>12}")
+    for name, rate in terrains.items():
+        print(f"  {name:<44}{rate / 1e6:>12.0f}{rate / terrains['flat']:>12.2f}")
+
     print("\n  ratios (per core, batch on 1 thread)")
     print(f"  {'numba single / NumPy 1 robot':<44}{single / np_rates[1]:>12.1f}")
     print(f"  {'numba batch / NumPy 1 robot':<44}{batch_rates[1] / np_rates[1]:>12.1f}")
@@ -246,6 +276,7 @@ def main() -> None:
         (">= 30x NumPy (batch vs NumPy 1 robot)", batch_rates[1] / np_rates[1] >= 30),
         (">= 30x NumPy (batch vs NumPy 32 robots)", batch_rates[1] / np_rates[n_batch] >= 30),
         ("warm start loads from cache, no recompile", not recompiled),
+        ("every terrain >= 80 % of flat", min(terrains.values()) >= 0.8 * terrains["flat"]),
     ]
     print("\n  targets")
     for label, met in checks:
