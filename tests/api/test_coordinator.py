@@ -219,6 +219,10 @@ def test_fitness_waiting_for_its_write_is_saved_at_a_shutdown(db: Database) -> N
     first = Coordinator(db, frozen, batch_size=2, save_seconds=60.0, poll_seconds=0.05)
     first.start()
     frozen.wait_frozen()
+    driver = first._drivers[run.id][0]
+    deadline = time.monotonic() + 10  # the third batch returned; wait until its fitness landed
+    while sum(len(b.fitness) for b in driver.landed) < 6 and time.monotonic() < deadline:
+        time.sleep(0.01)
     first.stop()
     frozen.release.set()
     with db.read() as session:
