@@ -103,7 +103,10 @@ class Rough(BaseModel):
         return _waves(self.amplitude, self.wavelength, self.seed)
 
     def params(self) -> list[float]:
-        return self.waves().ravel().tolist()
+        """The highest the field reaches (sum of |weights|: masses above skip the cosines),
+        then the waves row by row."""
+        waves = self.waves()
+        return [float(np.abs(waves[:, 3]).sum()), *waves.ravel().tolist()]
 
     def surface(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
         x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))

@@ -27,18 +27,9 @@ def _orphaned(at: float):  # type: ignore[no-untyped-def]
     )
 
 
-_RUNS = Run.__table__
+# the same predicate as `acquire`'s, its time a bound parameter: compiled once, not per tick
 _CANDIDATES = (
-    select(_RUNS.c.id)
-    .where(
-        or_(
-            _RUNS.c.status == RunStatus.QUEUED.value,
-            (_RUNS.c.status == RunStatus.RUNNING.value)
-            & or_(_RUNS.c.lease_expires.is_(None), _RUNS.c.lease_expires < bindparam("b_at")),
-        )
-    )
-    .order_by(_RUNS.c.id)
-    .limit(bindparam("b_limit"))
+    select(Run.id).where(_orphaned(bindparam("b_at"))).order_by(Run.id).limit(bindparam("b_limit"))
 )
 
 

@@ -114,17 +114,14 @@ def _contact(kind, tp, x, y, z):
         if index >= 1.0 and face < below:
             return face, -1.0, 0.0, 0.0
         return below, 0.0, 0.0, 1.0
-    if kind == 3:  # rough: tp = ROUGH_WAVES rows of kx, ky, phase, weight
-        reach = 0.0
-        for w in range(tp.shape[0] // 4):
-            reach += abs(tp[4 * w + 3])
-        if z >= reach:  # above the highest the field can reach: no trigonometry
+    if kind == 3:  # rough: tp = the highest the field reaches, then rows kx, ky, phase, weight
+        if z >= tp[0]:  # above the highest the field can reach: no trigonometry
             return 0.0, 0.0, 0.0, 1.0
         h = 0.0
         hx = 0.0
         hy = 0.0
         for w in range(tp.shape[0] // 4):
-            kx, ky, phase, weight = tp[4 * w], tp[4 * w + 1], tp[4 * w + 2], tp[4 * w + 3]
+            kx, ky, phase, weight = tp[4 * w + 1], tp[4 * w + 2], tp[4 * w + 3], tp[4 * w + 4]
             angle = kx * x + ky * y + phase
             h += weight * math.cos(angle)
             slope = weight * math.sin(angle)
@@ -175,6 +172,19 @@ def _integrate_terrain(
         x[m] += vx[m] * dt
         y[m] += vy[m] * dt
         z[m] += vz[m] * dt
+
+
+@njit(inline="always", **_JIT)
+def _advance(
+    step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt, kind, tp
+):
+    """One step's contact and integration for both kernels: the flat ground's original
+    arithmetic (`_integrate`, to the last bit) or any other terrain's."""
+    if kind == 0:
+        _integrate(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt)
+    else:
+        _integrate_terrain(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction,
+                           damping, dt, kind, tp)  # fmt: skip
 
 
 @njit(inline="always", **_JIT)
@@ -271,12 +281,8 @@ def simulate_one(
             fx[m] = ax
             fy[m] = ay
             fz[m] = az
-        if terrain_kind == 0:  # the flat ground's original arithmetic
-            _integrate(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction,
-                       damping, dt)  # fmt: skip
-        else:
-            _integrate_terrain(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction,
-                               damping, dt, terrain_kind, terrain)  # fmt: skip
+        _advance(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt,
+                 terrain_kind, terrain)  # fmt: skip
 
 
 @njit(**_JIT)
@@ -375,9 +381,5 @@ def simulate_many(
                 fy[e] += py[e]
             for e in range(count):
                 fz[e] += pz[e]
-        if terrain_kind == 0:  # the flat ground's original arithmetic
-            _integrate(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction,
-                       damping, dt)  # fmt: skip
-        else:
-            _integrate_terrain(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction,
-                               damping, dt, terrain_kind, terrain)  # fmt: skip
+        _advance(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt,
+                 terrain_kind, terrain)  # fmt: skip
