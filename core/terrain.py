@@ -2,7 +2,7 @@
 
 Every kind is a solid below a surface; a mass inside it is pushed out along the surface normal
 by the same penalty spring and held by the same Coulomb friction as on the flat ground (the
-kernels' `_contact`, docs/physics.md "Terrain"). The surface is a function of x and y only and
+kernels' `_contact_pass`, docs/physics.md "Terrain"). The surface is a function of x and y only and
 every kind is invariant along y except `rough`:
 
 * `flat`: z = 0 (the paper's ground; the default, and the kernels' original arithmetic);
@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 from functools import lru_cache
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
@@ -30,6 +30,45 @@ from pydantic import BaseModel, ConfigDict, Field
 FLAT, SLOPE, STEPS, ROUGH, HURDLES = 0, 1, 2, 3, 4
 #: Cosines summed by a rough terrain.
 ROUGH_WAVES = 8
+
+# Cody-Waite pi / 2 in two parts (the first with 33 significant bits, so q x it is exact) and the
+# minimax coefficients of sin and cos on [-pi / 4, pi / 4] (fdlibm's k_sin.c and k_cos.c).
+_PIO2_HI, _PIO2_LO = 1.57079632673412561417e00, 6.07710050650619224932e-11
+_SIN = (
+    -1.66666666666666324348e-01,
+    8.33333333332248946124e-03,
+    -1.98412698298579493134e-04,
+    2.75573137070700676789e-06,
+    -2.50507602534068634195e-08,
+    1.58969099521155010221e-10,
+)
+_COS = (
+    4.16666666666666019037e-02,
+    -1.38888888888741095749e-03,
+    2.48015872894767294178e-05,
+    -2.75573143513906633035e-07,
+    2.08757232129817482790e-09,
+    -1.13596475577881948265e-11,
+)
+
+
+def sincos(angle: Any) -> tuple[Any, Any]:  # a float in the kernels, an array in NumPy
+    """sin and cos of `angle` (rad) within 2 ulp (1e-20 at the zeros), in plain IEEE arithmetic
+    without branches or library calls: the same bits in NumPy and in the kernels (which compile
+    this function) on every machine, where libm's may differ by an ulp, and a loop of it
+    vectorises. For |angle| below 1e6; a rough field's angles are a few hundred radians."""
+    q = np.floor(angle * (2.0 / math.pi) + 0.5)  # nearest multiple of pi / 2
+    r = (angle - q * _PIO2_HI) - q * _PIO2_LO
+    r2 = r * r
+    s1, s2, s3, s4, s5, s6 = _SIN
+    c1, c2, c3, c4, c5, c6 = _COS
+    sin_r = r + r * r2 * (s1 + r2 * (s2 + r2 * (s3 + r2 * (s4 + r2 * (s5 + r2 * s6)))))
+    cos_r = 1.0 - 0.5 * r2 + r2 * r2 * (c1 + r2 * (c2 + r2 * (c3 + r2 * (c4 + r2 * (c5 + r2 * c6)))))  # fmt: skip # noqa: E501
+    quadrant = q - 4.0 * np.floor(q * 0.25)  # 0, 1, 2 or 3: turn (sin_r, cos_r) by that many
+    plus = (quadrant == 0.0) * 1.0 - (quadrant == 2.0) * 1.0  # quarter turns: signs are exact
+    minus = (quadrant == 1.0) * 1.0 - (quadrant == 3.0) * 1.0
+    return sin_r * plus + cos_r * minus, cos_r * plus - sin_r * minus
+
 
 _MODEL = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 
@@ -112,7 +151,7 @@ class Rough(BaseModel):
         x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
         total = np.zeros(x.shape)
         for kx, ky, phase, weight in self.waves().tolist():  # the kernels' order of summation
-            total = total + weight * np.cos(kx * x + ky * y + phase)
+            total = total + weight * sincos(kx * x + ky * y + phase)[1]
         return total
 
 
@@ -123,7 +162,8 @@ def _waves(amplitude: float, wavelength: float, seed: int) -> np.ndarray:
     phase = rng.uniform(0.0, 2.0 * math.pi, ROUGH_WAVES)
     wavenumber = 2.0 * math.pi / wavelength
     weight = np.full(ROUGH_WAVES, amplitude / ROUGH_WAVES)
-    waves = np.stack([wavenumber * np.cos(angle), wavenumber * np.sin(angle), phase, weight], 1)
+    sin_angle, cos_angle = sincos(angle)  # not NumPy's, whose SIMD paths differ between CPUs
+    waves = np.stack([wavenumber * cos_angle, wavenumber * sin_angle, phase, weight], 1)
     waves.flags.writeable = False
     return waves
 

@@ -51,6 +51,8 @@ import math
 import numpy as np
 from numba import njit
 
+from softevo.core.terrain import sincos
+
 #: Smallest spring length divided by (guards a collapsed or padding spring against 0 / 0).
 D_MIN = 1e-12
 #: Smallest horizontal speed divided by in the friction step.
@@ -94,81 +96,121 @@ def _integrate(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction,
         z[m] += vz[m] * dt
 
 
+_sincos = njit(inline="always", **_JIT)(sincos)
+
+
 @njit(inline="always", **_JIT)
-def _contact(kind, tp, x, y, z):
-    """Penetration depth (m) of a point at (x, y, z) into the terrain and the surface's unit
-    outward normal there (depth 0: no contact). `kind` and `tp` come from
-    `softevo.core.terrain.kernel_params`; see docs/physics.md "Terrain" for edges and faces."""
+def _rough_pass(tp, x, y, z, contact, near):
+    """`_contact_pass` on a rough field. Only the points below the highest the field reaches
+    (gathered into `near` and `contact[4:9]`) are evaluated, wave by wave in a loop over them
+    that vectorises (the portable `sincos`); each point sums its waves in the field's order."""
+    depth, nx, ny, nz = contact[0], contact[1], contact[2], contact[3]
+    px, py, h, hx, hy = contact[4], contact[5], contact[6], contact[7], contact[8]
+    for m in range(x.shape[0]):
+        depth[m] = 0.0
+        nx[m] = 0.0
+        ny[m] = 0.0
+        nz[m] = 1.0
+    count = 0
+    for m in range(x.shape[0]):  # without a branch: each point is written, kept if it is near
+        near[count] = m
+        count += z[m] < tp[0]
+    for c in range(count):
+        px[c] = x[near[c]]
+        py[c] = y[near[c]]
+        h[c] = 0.0
+        hx[c] = 0.0
+        hy[c] = 0.0
+    for w in range(tp.shape[0] // 4):
+        kx, ky, phase, weight = tp[4 * w + 1], tp[4 * w + 2], tp[4 * w + 3], tp[4 * w + 4]
+        for c in range(count):
+            sin_a, cos_a = _sincos(kx * px[c] + ky * py[c] + phase)
+            h[c] += weight * cos_a
+            slope = weight * sin_a
+            hx[c] -= slope * kx
+            hy[c] -= slope * ky
+    for c in range(count):
+        m = near[c]
+        touch = z[m] < h[c]
+        norm = math.sqrt(1.0 + hx[c] * hx[c] + hy[c] * hy[c])
+        depth[m] = (h[c] - z[m]) / norm if touch else 0.0
+        nx[m] = -hx[c] / norm if touch else 0.0
+        ny[m] = -hy[c] / norm if touch else 0.0
+        nz[m] = 1.0 / norm if touch else 1.0
+
+
+@njit(inline="always", **_JIT)
+def _contact_pass(kind, tp, x, y, z, contact, near):
+    """Penetration depth (m) of every point into the terrain and the surface's unit outward
+    normal there (depth 0 and normal e_z: no contact). `kind` and `tp` come from
+    `softevo.core.terrain.kernel_params`; see docs/physics.md "Terrain" for edges and faces.
+
+    Into `contact` [0:4]: one loop per kind, written with selects rather than branches, so the
+    compiler vectorises it; `contact` [9, M] and `near` [M] are the kernels' scratch."""
+    depth, nx, ny, nz = contact[0], contact[1], contact[2], contact[3]
+    n = x.shape[0]
     if kind == 1:  # slope: tp = tan, cos, sin of the angle; z = x tan
-        gap = x * tp[0] - z
-        if gap <= 0.0:
-            return 0.0, 0.0, 0.0, 1.0
-        return gap * tp[1], -tp[2], 0.0, tp[1]
-    if kind == 2:  # steps: tp = height, depth; step i (x in [i D, (i + 1) D)) has top i H
-        index = max(math.floor(x / tp[1]), 0.0)
-        top = index * tp[0]
-        if z >= top:
-            return 0.0, 0.0, 0.0, 1.0
-        below = top - z
-        face = x - index * tp[1]  # back through the riser the point crossed
-        if index >= 1.0 and face < below:
-            return face, -1.0, 0.0, 0.0
-        return below, 0.0, 0.0, 1.0
-    if kind == 3:  # rough: tp = the highest the field reaches, then rows kx, ky, phase, weight
-        if z >= tp[0]:  # above the highest the field can reach: no trigonometry
-            return 0.0, 0.0, 0.0, 1.0
-        h = 0.0
-        hx = 0.0
-        hy = 0.0
-        for w in range(tp.shape[0] // 4):
-            kx, ky, phase, weight = tp[4 * w + 1], tp[4 * w + 2], tp[4 * w + 3], tp[4 * w + 4]
-            angle = kx * x + ky * y + phase
-            h += weight * math.cos(angle)
-            slope = weight * math.sin(angle)
-            hx -= slope * kx
-            hy -= slope * ky
-        if z >= h:
-            return 0.0, 0.0, 0.0, 1.0
-        norm = math.sqrt(1.0 + hx * hx + hy * hy)
-        return (h - z) / norm, -hx / norm, -hy / norm, 1.0 / norm
-    if kind == 4:  # hurdles: tp = height, spacing, width; bar i >= 1 spans [i S, i S + W]
-        index = math.floor(x / tp[1])
-        along = x - index * tp[1]
-        if index >= 1.0 and along <= tp[2] and z < tp[0]:
-            top = tp[0] - z
+        for m in range(n):
+            gap = x[m] * tp[0] - z[m]
+            touch = gap > 0.0
+            depth[m] = gap * tp[1] if touch else 0.0
+            nx[m] = -tp[2] if touch else 0.0
+            ny[m] = 0.0
+            nz[m] = tp[1] if touch else 1.0
+    elif kind == 2:  # steps: tp = height, depth; step i (x in [i D, (i + 1) D)) has top i H
+        for m in range(n):
+            index = max(np.floor(x[m] / tp[1]), 0.0)
+            below = index * tp[0] - z[m]
+            face = x[m] - index * tp[1]  # back through the riser the point crossed
+            riser = (index >= 1.0) & (face < below)
+            touch = below > 0.0
+            depth[m] = (face if riser else below) if touch else 0.0
+            nx[m] = -1.0 if touch & riser else 0.0
+            ny[m] = 0.0
+            nz[m] = 0.0 if touch & riser else 1.0
+    elif kind == 3:  # rough: tp = the highest the field reaches, then rows kx, ky, phase, weight
+        _rough_pass(tp, x, y, z, contact, near)
+    else:  # hurdles (kind 4): tp = height, spacing, width; bar i >= 1 spans [i S, i S + W]
+        for m in range(n):
+            index = np.floor(x[m] / tp[1])
+            along = x[m] - index * tp[1]
+            top = tp[0] - z[m]
             back = tp[2] - along
-            if along < top and along <= back:
-                return along, -1.0, 0.0, 0.0
-            if back < top:
-                return back, 1.0, 0.0, 0.0
-            return top, 0.0, 0.0, 1.0
-    if z < 0.0:  # flat ground (and the ground between hurdles)
-        return -z, 0.0, 0.0, 1.0
-    return 0.0, 0.0, 0.0, 1.0
+            bar = (index >= 1.0) & (along <= tp[2]) & (top > 0.0)
+            front = (along < top) & (along <= back)  # nearest face: the front, the back, the top
+            rear = (not front) & (back < top)
+            ground = -z[m]
+            d_bar = along if front else (back if rear else top)
+            depth[m] = d_bar if bar else (ground if ground > 0.0 else 0.0)
+            nx[m] = (-1.0 if front else (1.0 if rear else 0.0)) if bar else 0.0
+            ny[m] = 0.0
+            nz[m] = 0.0 if bar & (front | rear) else 1.0
 
 
 @njit(inline="always", **_JIT)
 def _integrate_terrain(
-    step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt, kind, tp
-):
+    step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt, kind, tp,
+    contact, near,
+):  # fmt: skip
     """`_integrate` on any terrain: the penalty force along the surface normal, Coulomb
     friction against the velocity's part in the tangent plane."""
+    _contact_pass(kind, tp, x, y, z, contact, near)
+    depth, nx, ny, nz = contact[0], contact[1], contact[2], contact[3]
     for m in range(x.shape[0]):
         h = step_factor[m]
-        depth, nx, ny, nz = _contact(kind, tp, x[m], y[m], z[m])
-        normal = ground_k * depth
-        ux = vx[m] + (fx[m] + normal * nx) * h
-        uy = vy[m] + (fy[m] + normal * ny) * h
-        uz = vz[m] + (fz[m] + normal * nz) * h
-        along = ux * nx + uy * ny + uz * nz
-        tx = ux - along * nx
-        ty = uy - along * ny
-        tz = uz - along * nz
+        normal = ground_k * depth[m]
+        ux = vx[m] + (fx[m] + normal * nx[m]) * h
+        uy = vy[m] + (fy[m] + normal * ny[m]) * h
+        uz = vz[m] + (fz[m] + normal * nz[m]) * h
+        along = ux * nx[m] + uy * ny[m] + uz * nz[m]
+        tx = ux - along * nx[m]
+        ty = uy - along * ny[m]
+        tz = uz - along * nz[m]
         speed = math.sqrt(tx * tx + ty * ty + tz * tz)
         slip = max(1.0 - friction * normal * h / max(speed, V_MIN), 0.0)
-        vx[m] = (tx * slip + along * nx) * damping
-        vy[m] = (ty * slip + along * ny) * damping
-        vz[m] = (tz * slip + along * nz) * damping
+        vx[m] = (tx * slip + along * nx[m]) * damping
+        vy[m] = (ty * slip + along * ny[m]) * damping
+        vz[m] = (tz * slip + along * nz[m]) * damping
         x[m] += vx[m] * dt
         y[m] += vy[m] * dt
         z[m] += vz[m] * dt
@@ -176,15 +218,16 @@ def _integrate_terrain(
 
 @njit(inline="always", **_JIT)
 def _advance(
-    step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt, kind, tp
-):
+    step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt, kind, tp,
+    contact, near,
+):  # fmt: skip
     """One step's contact and integration for both kernels: the flat ground's original
     arithmetic (`_integrate`, to the last bit) or any other terrain's."""
     if kind == 0:
         _integrate(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt)
     else:
         _integrate_terrain(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction,
-                           damping, dt, kind, tp)  # fmt: skip
+                           damping, dt, kind, tp, contact, near)  # fmt: skip
 
 
 @njit(inline="always", **_JIT)
@@ -225,6 +268,8 @@ def simulate_one(
         first[m + 1] += first[m]
     incident = np.empty(2 * n_springs, dtype=np.int64)
     fill = first[:-1].copy()
+    contact = np.empty((9, n_masses))  # terrain contact scratch (`_contact_pass`)
+    near = np.empty(n_masses, dtype=np.int64)
     for s in range(n_springs):
         incident[fill[spring_a[s]]] = s
         fill[spring_a[s]] += 1
@@ -282,7 +327,7 @@ def simulate_one(
             fy[m] = ay
             fz[m] = az
         _advance(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt,
-                 terrain_kind, terrain)  # fmt: skip
+                 terrain_kind, terrain, contact, near)  # fmt: skip
 
 
 @njit(**_JIT)
@@ -317,6 +362,8 @@ def simulate_many(
     fx = np.empty(n)
     fy = np.empty(n)
     fz = np.empty(n)
+    contact = np.empty((9, n))  # terrain contact scratch (`_contact_pass`)
+    near = np.empty(n, dtype=np.int64)
     for step in range(n_steps + 1):
         if step == settle_step:
             settle_x[:, :] = x.reshape(n_points, n_robots)
@@ -382,4 +429,4 @@ def simulate_many(
             for e in range(count):
                 fz[e] += pz[e]
         _advance(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt,
-                 terrain_kind, terrain)  # fmt: skip
+                 terrain_kind, terrain, contact, near)  # fmt: skip
