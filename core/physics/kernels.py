@@ -51,17 +51,15 @@ import math
 import numpy as np
 from numba import njit
 
-from softevo.core.terrain import sincos
+from softevo.core.physics.contact import JIT, contact_pass
 
 #: Smallest spring length divided by (guards a collapsed or padding spring against 0 / 0).
 D_MIN = 1e-12
 #: Smallest horizontal speed divided by in the friction step.
 V_MIN = 1e-300
 
-_JIT = {"cache": True, "nogil": True, "error_model": "numpy", "boundscheck": False}
 
-
-@njit(inline="always", **_JIT)
+@njit(inline="always", **JIT)
 def _spring_force(dx, dy, dz, k, rest, amp_sin, amp_cos, sin_t, cos_t):
     """Force f (x_j - x_i) on the first end of a spring with vector (dx, dy, dz) = x_j - x_i.
 
@@ -73,7 +71,7 @@ def _spring_force(dx, dy, dz, k, rest, amp_sin, amp_cos, sin_t, cos_t):
     return f * dx, f * dy, f * dz
 
 
-@njit(inline="always", **_JIT)
+@njit(inline="always", **JIT)
 def _integrate(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt):
     """Ground contact, friction, damping and the semi-implicit Euler update of every mass.
 
@@ -96,105 +94,15 @@ def _integrate(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction,
         z[m] += vz[m] * dt
 
 
-_sincos = njit(inline="always", **_JIT)(sincos)
-
-
-@njit(inline="always", **_JIT)
-def _rough_pass(tp, x, y, z, contact, near):
-    """`_contact_pass` on a rough field. Only the points below the highest the field reaches
-    (gathered into `near` and `contact[4:9]`) are evaluated, wave by wave in a loop over them
-    that vectorises (the portable `sincos`); each point sums its waves in the field's order."""
-    depth, nx, ny, nz = contact[0], contact[1], contact[2], contact[3]
-    px, py, h, hx, hy = contact[4], contact[5], contact[6], contact[7], contact[8]
-    for m in range(x.shape[0]):
-        depth[m] = 0.0
-        nx[m] = 0.0
-        ny[m] = 0.0
-        nz[m] = 1.0
-    count = 0
-    for m in range(x.shape[0]):  # without a branch: each point is written, kept if it is near
-        near[count] = m
-        count += z[m] < tp[0]
-    for c in range(count):
-        px[c] = x[near[c]]
-        py[c] = y[near[c]]
-        h[c] = 0.0
-        hx[c] = 0.0
-        hy[c] = 0.0
-    for w in range(tp.shape[0] // 4):
-        kx, ky, phase, weight = tp[4 * w + 1], tp[4 * w + 2], tp[4 * w + 3], tp[4 * w + 4]
-        for c in range(count):
-            sin_a, cos_a = _sincos(kx * px[c] + ky * py[c] + phase)
-            h[c] += weight * cos_a
-            slope = weight * sin_a
-            hx[c] -= slope * kx
-            hy[c] -= slope * ky
-    for c in range(count):
-        m = near[c]
-        touch = z[m] < h[c]
-        norm = math.sqrt(1.0 + hx[c] * hx[c] + hy[c] * hy[c])
-        depth[m] = (h[c] - z[m]) / norm if touch else 0.0
-        nx[m] = -hx[c] / norm if touch else 0.0
-        ny[m] = -hy[c] / norm if touch else 0.0
-        nz[m] = 1.0 / norm if touch else 1.0
-
-
-@njit(inline="always", **_JIT)
-def _contact_pass(kind, tp, x, y, z, contact, near):
-    """Penetration depth (m) of every point into the terrain and the surface's unit outward
-    normal there (depth 0 and normal e_z: no contact). `kind` and `tp` come from
-    `softevo.core.terrain.kernel_params`; see docs/physics.md "Terrain" for edges and faces.
-
-    Into `contact` [0:4]: one loop per kind, written with selects rather than branches, so the
-    compiler vectorises it; `contact` [9, M] and `near` [M] are the kernels' scratch."""
-    depth, nx, ny, nz = contact[0], contact[1], contact[2], contact[3]
-    n = x.shape[0]
-    if kind == 1:  # slope: tp = tan, cos, sin of the angle; z = x tan
-        for m in range(n):
-            gap = x[m] * tp[0] - z[m]
-            touch = gap > 0.0
-            depth[m] = gap * tp[1] if touch else 0.0
-            nx[m] = -tp[2] if touch else 0.0
-            ny[m] = 0.0
-            nz[m] = tp[1] if touch else 1.0
-    elif kind == 2:  # steps: tp = height, depth; step i (x in [i D, (i + 1) D)) has top i H
-        for m in range(n):
-            index = max(np.floor(x[m] / tp[1]), 0.0)
-            below = index * tp[0] - z[m]
-            face = x[m] - index * tp[1]  # back through the riser the point crossed
-            riser = (index >= 1.0) & (face < below)
-            touch = below > 0.0
-            depth[m] = (face if riser else below) if touch else 0.0
-            nx[m] = -1.0 if touch & riser else 0.0
-            ny[m] = 0.0
-            nz[m] = 0.0 if touch & riser else 1.0
-    elif kind == 3:  # rough: tp = the highest the field reaches, then rows kx, ky, phase, weight
-        _rough_pass(tp, x, y, z, contact, near)
-    else:  # hurdles (kind 4): tp = height, spacing, width; bar i >= 1 spans [i S, i S + W]
-        for m in range(n):
-            index = np.floor(x[m] / tp[1])
-            along = x[m] - index * tp[1]
-            top = tp[0] - z[m]
-            back = tp[2] - along
-            bar = (index >= 1.0) & (along <= tp[2]) & (top > 0.0)
-            front = (along < top) & (along <= back)  # nearest face: the front, the back, the top
-            rear = (not front) & (back < top)
-            ground = -z[m]
-            d_bar = along if front else (back if rear else top)
-            depth[m] = d_bar if bar else (ground if ground > 0.0 else 0.0)
-            nx[m] = (-1.0 if front else (1.0 if rear else 0.0)) if bar else 0.0
-            ny[m] = 0.0
-            nz[m] = 0.0 if bar & (front | rear) else 1.0
-
-
-@njit(inline="always", **_JIT)
+@njit(inline="always", **JIT)
 def _integrate_terrain(
     step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt, kind, tp,
     contact, near,
 ):  # fmt: skip
     """`_integrate` on any terrain: the penalty force along the surface normal, Coulomb
-    friction against the velocity's part in the tangent plane."""
-    _contact_pass(kind, tp, x, y, z, contact, near)
+    friction against the velocity's part in the tangent plane (`contact` [9, M] and `near` [M]:
+    scratch for `contact_pass`)."""
+    contact_pass(kind, tp, x, y, z, contact, near)
     depth, nx, ny, nz = contact[0], contact[1], contact[2], contact[3]
     for m in range(x.shape[0]):
         h = step_factor[m]
@@ -216,7 +124,7 @@ def _integrate_terrain(
         z[m] += vz[m] * dt
 
 
-@njit(inline="always", **_JIT)
+@njit(inline="always", **JIT)
 def _advance(
     step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt, kind, tp,
     contact, near,
@@ -230,7 +138,7 @@ def _advance(
                            damping, dt, kind, tp, contact, near)  # fmt: skip
 
 
-@njit(inline="always", **_JIT)
+@njit(inline="always", **JIT)
 def _actuator_power(dx, dy, dz, k, rest, amp_sin, amp_cos, sin_t, cos_t, omega):
     """|T dL0/dt| (W): the rate at which a spring's actuator works against its tension T."""
     d = math.sqrt(dx * dx + dy * dy + dz * dz)
@@ -238,7 +146,7 @@ def _actuator_power(dx, dy, dz, k, rest, amp_sin, amp_cos, sin_t, cos_t, omega):
     return abs(k * (d - length0) * (omega * (amp_sin * cos_t - amp_cos * sin_t)))
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def simulate_one(
     x, y, z, vx, vy, vz,  # [M] positions (m), velocities (m/s); updated in place
     step_factor,  # [M] dt / mass, or 0 for a mass that must not move
@@ -330,7 +238,7 @@ def simulate_one(
                  terrain_kind, terrain, contact, near)  # fmt: skip
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def simulate_many(
     x, y, z, vx, vy, vz,  # [P, B] positions, velocities of the box's points; updated in place
     step_factor,  # [P, B] dt / mass, or 0 for a point the robot lacks
