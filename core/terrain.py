@@ -64,10 +64,15 @@ def sincos(angle: Any) -> tuple[Any, Any]:  # a float in the kernels, an array i
     c1, c2, c3, c4, c5, c6 = _COS
     sin_r = r + r * r2 * (s1 + r2 * (s2 + r2 * (s3 + r2 * (s4 + r2 * (s5 + r2 * s6)))))
     cos_r = 1.0 - 0.5 * r2 + r2 * r2 * (c1 + r2 * (c2 + r2 * (c3 + r2 * (c4 + r2 * (c5 + r2 * c6)))))  # fmt: skip # noqa: E501
-    quadrant = q - 4.0 * np.floor(q * 0.25)  # 0, 1, 2 or 3: turn (sin_r, cos_r) by that many
-    plus = (quadrant == 0.0) * 1.0 - (quadrant == 2.0) * 1.0  # quarter turns: signs are exact
-    minus = (quadrant == 1.0) * 1.0 - (quadrant == 3.0) * 1.0
-    return sin_r * plus + cos_r * minus, cos_r * plus - sin_r * minus
+    # Turn (sin_r, cos_r) by q quarter turns: an odd q swaps them, q mod 4 in {2, 3} negates
+    # sin. Products with 0, 1 or -1 and sums with 0 are exact, so this picks the bits.
+    half = np.floor(q * 0.5)
+    odd = q - 2.0 * half
+    even = 1.0 - odd
+    sign = 1.0 - 2.0 * (half - 2.0 * np.floor(q * 0.25))
+    sin_a = sign * (sin_r * even + cos_r * odd)
+    cos_a = (sign * even - sign * odd) * (cos_r * even + sin_r * odd)
+    return sin_a, cos_a
 
 
 _MODEL = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
