@@ -25,10 +25,10 @@ _sincos = njit(inline="always", **JIT)(sincos)
 
 
 @njit(inline="always", **JIT)
-def _rough_pass(tp, x, y, z, contact, near):
-    """`contact_pass` on a rough field. Only the points below the highest the field reaches
-    (gathered into `near` and `contact[4:9]`) are evaluated, wave by wave in a loop over them
-    that vectorises (the portable `sincos`); each point sums its waves in the field's order."""
+def _rough_pass(tp, x, y, z, step_factor, contact, near):
+    """`contact_pass` on a rough field. Only the points that move and are below the highest the
+    field reaches (gathered into `near` and `contact[4:9]`) are evaluated, wave by wave in a
+    loop over them that vectorises (the portable `sincos`); each sums its waves in order."""
     depth, nx, ny, nz = contact[0], contact[1], contact[2], contact[3]
     px, py, h, hx, hy = contact[4], contact[5], contact[6], contact[7], contact[8]
     for m in range(x.shape[0]):
@@ -39,7 +39,7 @@ def _rough_pass(tp, x, y, z, contact, near):
     count = 0
     for m in range(x.shape[0]):  # without a branch: each point is written, kept if it is near
         near[count] = m
-        count += z[m] < tp[0]
+        count += (z[m] < tp[0]) & (step_factor[m] > 0.0)  # (a point that never moves: 0)
     for c in range(count):
         px[c] = x[near[c]]
         py[c] = y[near[c]]
@@ -65,7 +65,7 @@ def _rough_pass(tp, x, y, z, contact, near):
 
 
 @njit(inline="always", **JIT)
-def contact_pass(kind, tp, x, y, z, contact, near):
+def contact_pass(kind, tp, x, y, z, step_factor, contact, near):
     """Penetration depth (m) of every point into the terrain and the surface's unit outward
     normal there (depth 0 and normal e_z: no contact). `kind` and `tp` come from
     `softevo.core.terrain.kernel_params`; see docs/physics.md "Terrain" for edges and faces.
@@ -95,7 +95,7 @@ def contact_pass(kind, tp, x, y, z, contact, near):
             ny[m] = 0.0
             nz[m] = 0.0 if touch & riser else 1.0
     elif kind == 3:  # rough: tp = the highest the field reaches, then rows kx, ky, phase, weight
-        _rough_pass(tp, x, y, z, contact, near)
+        _rough_pass(tp, x, y, z, step_factor, contact, near)
     else:  # hurdles (kind 4): tp = height, spacing, width; bar i >= 1 spans [i S, i S + W]
         for m in range(n):
             index = np.floor(x[m] / tp[1])

@@ -102,7 +102,7 @@ def _integrate_terrain(
     """`_integrate` on any terrain: the penalty force along the surface normal, Coulomb
     friction against the velocity's part in the tangent plane (`contact` [9, M] and `near` [M]:
     scratch for `contact_pass`)."""
-    contact_pass(kind, tp, x, y, z, contact, near)
+    contact_pass(kind, tp, x, y, z, step_factor, contact, near)
     depth, nx, ny, nz = contact[0], contact[1], contact[2], contact[3]
     for m in range(x.shape[0]):
         h = step_factor[m]
