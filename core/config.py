@@ -79,6 +79,11 @@ class RunConfig(GAConfig):
             )
         if self.encoding == "cube-springs" and len(self.cube_options) < 2:
             raise ValueError("cube_options: at least two options are needed to evolve")
+        if self.descriptors and self.encoding != "voxel":
+            raise ValueError(
+                f"descriptors: defined on voxel labels, so only for the voxel encoding, not "
+                f"{self.encoding}"
+            )
         omegas = {w for _, b, w, _ in self.cube_options if b != 0}
         if self.encoding == "cube-springs" and len(omegas) > 1:
             raise ValueError(f"cube_options: actuated options must share one w, got {omegas}")

@@ -16,7 +16,7 @@ from typing import Any
 from softevo.core.config import RunConfig
 from softevo.core.evaluator import Evaluator
 from softevo.core.ga.algorithm import GAState, GeneticAlgorithm, Individual
-from softevo.core.ga.stats import CURVE_COLUMNS, GenerationStats
+from softevo.core.ga.stats import CURVE_COLUMNS, QD_COLUMNS, GenerationStats
 from softevo.core.generation import Engine
 from softevo.core.robot import Robot
 
@@ -110,9 +110,8 @@ class Evolution:
         return self.algorithm.encoding.to_robot(genome, self.config.sim), fitness, generation
 
     def curve(self) -> list[dict[str, Any]]:
-        """One row per finished generation, with the columns of `CURVE_COLUMNS`."""
-        rows = []
-        for stats in self.state.history:
-            data = stats.to_json()
-            rows.append({column: data[column] for column in CURVE_COLUMNS})
-        return rows
+        """One row per finished generation, with the columns of `CURVE_COLUMNS` (and
+        `QD_COLUMNS` for a run with an archive)."""
+        columns = CURVE_COLUMNS + (QD_COLUMNS if self.config.descriptors else ())
+        rows = (stats.to_json() for stats in self.state.history)
+        return [{column: row[column] for column in columns} for row in rows]

@@ -23,3 +23,6 @@ IN_FLIGHT = 64
 SAVE_SECONDS = 1.0
 #: Most mass positions one replay carries (frames x masses), about 20 MB of JSON.
 MAX_REPLAY_POSITIONS = 1_000_000
+#: Most cells of a quality-diversity archive (the product of its `bins`) and most descriptors.
+MAX_ARCHIVE_CELLS = 10_000
+MAX_DESCRIPTORS = 3

@@ -21,23 +21,29 @@ One generation (g > 0), with P the population size:
 
 Two baselines share the machinery (`algorithm`), so they run through the same service, cache and
 accounting: `random` search (P new random genomes every generation) and `hillclimb` (the best of
-g-1 and P-1 mutants of it).
+g-1 and P-1 mutants of it). So does quality-diversity: `map-elites` breeds from an archive
+(`softevo.core.ga.archive`) that keeps the fittest robot of every cell of its `descriptors`;
+with descriptors, any other algorithm keeps the same archive beside it, for comparison.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import replace
 from typing import Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from softevo.core.encodings import Encoding
 from softevo.core.ga import operators
+from softevo.core.ga.archive import Archive
+from softevo.core.ga.descriptors import CATALOGUE, describe
+from softevo.core.ga.state import GAState, Individual, generation_rng
 from softevo.core.ga.stats import GenerationStats, generation_stats
-from softevo.core.genome import Genome
-from softevo.core.nulls import from_nulls, to_nulls
+from softevo.core.limits import MAX_ARCHIVE_CELLS, MAX_DESCRIPTORS
+
+__all__ = ["GAConfig", "GAState", "GeneticAlgorithm", "Individual", "generation_rng"]
 
 
 class GAConfig(BaseModel):
@@ -45,12 +51,21 @@ class GAConfig(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 
-    algorithm: Literal["ga", "random", "hillclimb"] = Field(
+    algorithm: Literal["ga", "random", "hillclimb", "map-elites"] = Field(
         "ga",
         description="ga: the genetic algorithm below; random: P new random genomes every "
         "generation (random search); hillclimb: the best of the last generation and P-1 "
-        "mutants of it (a (1+lambda) hill climber). The last two are baselines.",
+        "mutants of it (a (1+lambda) hill climber); map-elites: quality-diversity, parents "
+        "drawn from an archive that keeps the best robot of every cell of `descriptors` x "
+        "`bins`, children by the GA's crossover and mutation, plus immigrants.",
     )
+    descriptors: tuple[str, ...] = Field(
+        (),
+        description="quality-diversity descriptors (softevo.core.ga.descriptors: voxels, "
+        "actuated, soft, height); required by map-elites, and with any other algorithm an "
+        "archive is kept beside it for comparison",
+    )
+    bins: tuple[int, ...] = Field((), description="cells along each descriptor's range")
     population: int = Field(25, ge=2, le=10_000)
     generations: int = Field(100, ge=1, le=100_000)
     selection: Literal["grouped", "tournament", "roulette"] = "grouped"
@@ -64,9 +79,37 @@ class GAConfig(BaseModel):
     immigrants: float = Field(0.12, ge=0, le=1, description="fraction of P, each generation")
     elitism: bool = True
 
+    @field_validator("descriptors", "bins", mode="before")
+    @classmethod
+    def _tuple(cls, value: Any) -> Any:
+        return tuple(value) if isinstance(value, list) else value
+
+    @model_validator(mode="after")
+    def _archive(self) -> GAConfig:
+        if self.algorithm == "map-elites" and not self.descriptors:
+            raise ValueError("descriptors: map-elites needs at least one descriptor")
+        unknown = [name for name in self.descriptors if name not in CATALOGUE]
+        if unknown:
+            raise ValueError(f"descriptors: unknown {unknown} (known: {', '.join(CATALOGUE)})")
+        if len(set(self.descriptors)) != len(self.descriptors):
+            raise ValueError(f"descriptors: each at most once, got {list(self.descriptors)}")
+        if len(self.descriptors) > MAX_DESCRIPTORS:
+            raise ValueError(f"descriptors: at most {MAX_DESCRIPTORS}, got {len(self.descriptors)}")
+        if len(self.bins) != len(self.descriptors):
+            raise ValueError(
+                f"bins: one count per descriptor, got {len(self.bins)} for "
+                f"{len(self.descriptors)} descriptors"
+            )
+        if any(b < 1 for b in self.bins) or math.prod(self.bins) > MAX_ARCHIVE_CELLS:
+            raise ValueError(
+                f"bins: each at least 1 and at most {MAX_ARCHIVE_CELLS} cells in all, got "
+                f"{list(self.bins)} ({math.prod(self.bins)} cells)"
+            )
+        return self
+
     @model_validator(mode="after")
     def _room_for_children(self) -> GAConfig:
-        if self.algorithm == "ga" and self.n_immigrants >= self.population:
+        if self.algorithm in ("ga", "map-elites") and self.n_immigrants >= self.population:
             raise ValueError(
                 f"immigrants: {self.immigrants} of {self.population} leaves no room for "
                 "survivors and children"
@@ -76,97 +119,6 @@ class GAConfig(BaseModel):
     @property
     def n_immigrants(self) -> int:
         return math.floor(self.immigrants * self.population + 0.5)
-
-
-@dataclass(frozen=True)
-class Individual:
-    """One member of a generation and where it came from (parents index the previous one)."""
-
-    genome: Genome
-    operator: str  # random | survivor | crossover | copy | immigrant (+ "+mutation")
-    parents: tuple[int, ...] = ()
-
-    def to_json(self) -> dict[str, Any]:
-        return {
-            "genome": self.genome.to_json(),
-            "operator": self.operator,
-            "parents": list(self.parents),
-        }
-
-    @classmethod
-    def from_json(cls, data: dict[str, Any]) -> Individual:
-        return cls(Genome.from_json(data["genome"]), data["operator"], tuple(data["parents"]))
-
-
-def generation_rng(seed: int, generation: int) -> np.random.Generator:
-    """The generator of generation `generation` of a run: a function of the seed and g only."""
-    return np.random.default_rng(np.random.SeedSequence([seed, generation]))
-
-
-@dataclass
-class GAState:
-    """Everything needed to go on: the generation being evaluated and the last one evaluated."""
-
-    seed: int
-    generation: int = 0
-    current: list[Individual] | None = None
-    previous: list[Individual] | None = None
-    previous_fitness: list[float] | None = None
-    best: tuple[Genome, float, int] | None = None  # genome, fitness, generation
-    history: list[GenerationStats] = field(default_factory=list)
-
-    def to_json(self, history: bool = True) -> dict[str, Any]:
-        """JSON; without `history` (kept elsewhere, as the service keeps its curve) the size
-        no longer grows with the generations."""
-
-        def individuals(items: list[Individual] | None) -> list[dict] | None:
-            return None if items is None else [item.to_json() for item in items]
-
-        return {
-            "seed": self.seed,
-            "generation": self.generation,
-            "current": individuals(self.current),
-            "previous": individuals(self.previous),
-            "previous_fitness": _floats_to_json(self.previous_fitness),
-            "best": None
-            if self.best is None
-            else {
-                "genome": self.best[0].to_json(),
-                "fitness": self.best[1],
-                "generation": self.best[2],
-            },
-            "history": [stats.to_json() for stats in self.history] if history else [],
-        }
-
-    @classmethod
-    def from_json(cls, data: dict[str, Any]) -> GAState:
-        def individuals(items: list[dict] | None) -> list[Individual] | None:
-            return None if items is None else [Individual.from_json(item) for item in items]
-
-        best = data.get("best")
-        return cls(
-            seed=int(data["seed"]),
-            generation=int(data["generation"]),
-            current=individuals(data.get("current")),
-            previous=individuals(data.get("previous")),
-            previous_fitness=_floats_from_json(data.get("previous_fitness")),
-            best=None
-            if best is None
-            else (
-                Genome.from_json(best["genome"]),
-                float(best["fitness"]),
-                int(best["generation"]),
-            ),
-            history=[GenerationStats.from_json(item) for item in data.get("history", [])],
-        )
-
-
-def _floats_to_json(values: list[float] | None) -> list[float | None] | None:
-    return None if values is None else to_nulls(values)
-
-
-def _floats_from_json(values: list[float | None] | None) -> list[float] | None:
-    return None if values is None else from_nulls(values).tolist()
 
 
 class GeneticAlgorithm:
@@ -214,6 +166,7 @@ class GeneticAlgorithm:
             if best is None or values[index] > best[1]:
                 best = (individuals[index].genome, float(values[index]), state.generation)
         best_so_far = best[1] if best is not None else math.nan
+        archive = self._archive(state, individuals, values)
         stats = generation_stats(
             state.generation,
             values,
@@ -221,6 +174,8 @@ class GeneticAlgorithm:
             best_so_far,
             **counts,
         )
+        if archive is not None:
+            stats = replace(stats, coverage=archive.coverage, qd_score=archive.qd_score)
         following = GAState(
             seed=state.seed,
             generation=state.generation + 1,
@@ -229,8 +184,26 @@ class GeneticAlgorithm:
             previous_fitness=values.tolist(),
             best=best,
             history=[*state.history, stats],
+            archive=archive,
         )
         return following, stats
+
+    def _archive(
+        self, state: GAState, individuals: list[Individual], fitness: np.ndarray
+    ) -> Archive | None:
+        """The archive after this generation (None for a run without descriptors): each robot
+        that did not fail is offered to the cell its body's descriptors fall in."""
+        config = self.config
+        if not config.descriptors:
+            return None
+        archive = state.archive or Archive(config.descriptors, config.bins)
+        archive = archive.copy()
+        box = self.encoding.shape
+        for index, (individual, value) in enumerate(zip(individuals, fitness, strict=True)):
+            if math.isfinite(value):
+                values = describe(config.descriptors, individual.genome.discrete, box)
+                archive.add(values, float(value), state.generation, index, individual.genome)
+        return archive
 
     def _breed(self, state: GAState) -> list[Individual]:
         config, encoding = self.config, self.encoding
@@ -239,6 +212,8 @@ class GeneticAlgorithm:
             return [Individual(encoding.random(rng), "random") for _ in range(config.population)]
         if config.algorithm == "random":
             return [Individual(encoding.random(rng), "random") for _ in range(config.population)]
+        if config.algorithm == "map-elites":
+            return self._from_archive(state.archive, rng)
         parents = state.previous
         fitness = np.asarray(state.previous_fitness, dtype=np.float64)
         if config.algorithm == "hillclimb":
@@ -263,6 +238,26 @@ class GeneticAlgorithm:
             children.extend(self._mate(parents[first], parents[second], (first, second), rng))
         return [
             *(Individual(parents[i].genome, "survivor", (int(i),)) for i in survivors),
+            *children[:n_children],
+            *(Individual(encoding.random(rng), "immigrant") for _ in range(config.n_immigrants)),
+        ]
+
+    def _from_archive(self, archive: Archive | None, rng: np.random.Generator) -> list[Individual]:
+        """MAP-Elites: children of pairs of elites drawn uniformly from the archive, by the GA's
+        crossover and mutation, then immigrants. Children carry no parent indices (their
+        parents are elites of any generation); their operator says `elite-...`."""
+        config, encoding = self.config, self.encoding
+        elites = archive.ordered() if archive else []
+        if not elites:  # nothing survived to breed from: start again at random
+            return [Individual(encoding.random(rng), "random") for _ in range(config.population)]
+        n_children = config.population - config.n_immigrants
+        mates = rng.integers(0, len(elites), size=2 * math.ceil(n_children / 2))
+        children: list[Individual] = []
+        for first, second in mates.reshape(-1, 2):
+            a, b = (Individual(elites[i].genome, "elite") for i in (first, second))
+            for child in self._mate(a, b, (int(first), int(second)), rng):
+                children.append(Individual(child.genome, f"elite-{child.operator}"))
+        return [
             *children[:n_children],
             *(Individual(encoding.random(rng), "immigrant") for _ in range(config.n_immigrants)),
         ]

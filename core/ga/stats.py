@@ -24,6 +24,10 @@ CURVE_COLUMNS = (
 )  # fmt: skip
 
 
+#: The columns a run with an archive adds (quality-diversity, `softevo.core.ga.archive`).
+QD_COLUMNS = ("coverage", "qd_score")
+
+
 @dataclass(frozen=True)
 class GenerationStats:
     generation: int
@@ -38,9 +42,16 @@ class GenerationStats:
     failed: int
     evaluations: int = 0  # simulations run for this generation
     saved: int = 0  # individuals whose fitness came from the cache
+    coverage: float | None = None  # runs with descriptors: filled fraction of the archive
+    qd_score: float | None = None  # and the sum of its elites' fitness
 
     def to_json(self) -> dict[str, Any]:
-        return {k: (to_null(v) if isinstance(v, float) else v) for k, v in asdict(self).items()}
+        """JSON; a run without an archive has no coverage or qd_score keys."""
+        return {
+            k: (to_null(v) if isinstance(v, float) else v)
+            for k, v in asdict(self).items()
+            if v is not None or k not in QD_COLUMNS
+        }
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> GenerationStats:

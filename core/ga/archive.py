@@ -1,0 +1,111 @@
+"""The MAP-Elites archive: a grid over descriptors (`softevo.core.ga.descriptors`), one elite per
+cell, the fittest robot whose descriptors fall in it.
+
+A cell's elite is replaced only by a strictly fitter robot; on equal fitness the smaller genome
+hash wins, so the archive after a set of evaluations is the same whatever order they arrived in.
+Failed robots (NaN) never enter. The archive is plain data and round-trips through JSON with the
+run's GA state, so a run that is taken over after a crash goes on with exactly its archive.
+
+Written here rather than taken from pyribs: its grid archive is these few rules, and pyribs 0.12
+brings scipy, pandas and scikit-learn (59 MB of wheels, measured with `pip download ribs`) into
+the service and its image; docs/evolution.md says more.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+from softevo.core.ga.descriptors import CATALOGUE
+from softevo.core.genome import Genome
+
+
+@dataclass(frozen=True)
+class Elite:
+    """The fittest robot of one cell, and where it was bred (generation, index in it)."""
+
+    cell: tuple[int, ...]
+    values: tuple[float, ...]  # descriptor values
+    fitness: float
+    generation: int
+    index: int
+    genome: Genome
+
+    def beats(self, other: Elite) -> bool:
+        if self.fitness != other.fitness:
+            return self.fitness > other.fitness
+        return self.genome.hash < other.genome.hash
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "cell": list(self.cell), "values": list(self.values), "fitness": self.fitness,
+            "generation": self.generation, "index": self.index, "genome": self.genome.to_json(),
+        }  # fmt: skip
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> Elite:
+        return cls(
+            tuple(data["cell"]), tuple(float(v) for v in data["values"]), float(data["fitness"]),
+            int(data["generation"]), int(data["index"]), Genome.from_json(data["genome"]),
+        )  # fmt: skip
+
+
+@dataclass
+class Archive:
+    """Cells by index tuple; `bins[i]` equal cells over descriptor i's range."""
+
+    names: tuple[str, ...]
+    bins: tuple[int, ...]
+    elites: dict[tuple[int, ...], Elite] = field(default_factory=dict)
+
+    def cell(self, values: tuple[float, ...]) -> tuple[int, ...]:
+        """The cell of descriptor `values` (a value on the range's top edge is in the last)."""
+        cell = []
+        for name, bins, value in zip(self.names, self.bins, values, strict=True):
+            low, high = CATALOGUE[name].low, CATALOGUE[name].high
+            position = math.floor((value - low) / (high - low) * bins)
+            cell.append(min(max(position, 0), bins - 1))
+        return tuple(cell)
+
+    def add(
+        self, values: tuple[float, ...], fitness: float, generation: int, index: int, genome: Genome
+    ) -> bool:
+        """Offer a robot; True if it became its cell's elite."""
+        if not values or not math.isfinite(fitness):
+            return False
+        candidate = Elite(self.cell(values), values, fitness, generation, index, genome)
+        current = self.elites.get(candidate.cell)
+        if current is not None and not candidate.beats(current):
+            return False
+        self.elites[candidate.cell] = candidate
+        return True
+
+    def ordered(self) -> list[Elite]:
+        """Every elite by cell: the order parents are drawn from, the same in every process."""
+        return [self.elites[cell] for cell in sorted(self.elites)]
+
+    @property
+    def coverage(self) -> float:
+        """Filled fraction of the cells."""
+        return len(self.elites) / math.prod(self.bins)
+
+    @property
+    def qd_score(self) -> float:
+        """Sum of the elites' fitness (a cell's elite only ever improves)."""
+        return math.fsum(elite.fitness for elite in self.elites.values())
+
+    def copy(self) -> Archive:
+        return Archive(self.names, self.bins, dict(self.elites))
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "descriptors": list(self.names),
+            "bins": list(self.bins),
+            "elites": [elite.to_json() for elite in self.ordered()],
+        }
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> Archive:
+        elites = (Elite.from_json(item) for item in data["elites"])
+        return cls(tuple(data["descriptors"]), tuple(data["bins"]), {e.cell: e for e in elites})

@@ -1,0 +1,109 @@
+"""The state of a run of the genetic algorithm, as plain data that round-trips through JSON:
+its individuals, where each came from, and each generation's own random generator."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from softevo.core.ga.archive import Archive
+from softevo.core.ga.stats import GenerationStats
+from softevo.core.genome import Genome
+from softevo.core.nulls import from_nulls, to_nulls
+
+
+@dataclass(frozen=True)
+class Individual:
+    """One member of a generation and where it came from (parents index the previous one)."""
+
+    genome: Genome
+    operator: str  # random | survivor | crossover | copy | immigrant (+ "+mutation")
+    parents: tuple[int, ...] = ()
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "genome": self.genome.to_json(),
+            "operator": self.operator,
+            "parents": list(self.parents),
+        }
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> Individual:
+        return cls(Genome.from_json(data["genome"]), data["operator"], tuple(data["parents"]))
+
+
+def generation_rng(seed: int, generation: int) -> np.random.Generator:
+    """The generator of generation `generation` of a run: a function of the seed and g only."""
+    return np.random.default_rng(np.random.SeedSequence([seed, generation]))
+
+
+@dataclass
+class GAState:
+    """Everything needed to go on: the generation being evaluated and the last one evaluated."""
+
+    seed: int
+    generation: int = 0
+    current: list[Individual] | None = None
+    previous: list[Individual] | None = None
+    previous_fitness: list[float] | None = None
+    best: tuple[Genome, float, int] | None = None  # genome, fitness, generation
+    history: list[GenerationStats] = field(default_factory=list)
+    archive: Archive | None = None  # quality-diversity runs: the archive after `previous`
+
+    def to_json(self, history: bool = True) -> dict[str, Any]:
+        """JSON; without `history` (kept elsewhere, as the service keeps its curve) the size
+        no longer grows with the generations."""
+
+        def individuals(items: list[Individual] | None) -> list[dict] | None:
+            return None if items is None else [item.to_json() for item in items]
+
+        archive = {} if self.archive is None else {"archive": self.archive.to_json()}
+        return {
+            **archive,
+            "seed": self.seed,
+            "generation": self.generation,
+            "current": individuals(self.current),
+            "previous": individuals(self.previous),
+            "previous_fitness": _floats_to_json(self.previous_fitness),
+            "best": None
+            if self.best is None
+            else {
+                "genome": self.best[0].to_json(),
+                "fitness": self.best[1],
+                "generation": self.best[2],
+            },
+            "history": [stats.to_json() for stats in self.history] if history else [],
+        }
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> GAState:
+        def individuals(items: list[dict] | None) -> list[Individual] | None:
+            return None if items is None else [Individual.from_json(item) for item in items]
+
+        best = data.get("best")
+        return cls(
+            seed=int(data["seed"]),
+            generation=int(data["generation"]),
+            current=individuals(data.get("current")),
+            previous=individuals(data.get("previous")),
+            previous_fitness=_floats_from_json(data.get("previous_fitness")),
+            best=None
+            if best is None
+            else (
+                Genome.from_json(best["genome"]),
+                float(best["fitness"]),
+                int(best["generation"]),
+            ),
+            history=[GenerationStats.from_json(item) for item in data.get("history", [])],
+            archive=Archive.from_json(data["archive"]) if data.get("archive") else None,
+        )
+
+
+def _floats_to_json(values: list[float] | None) -> list[float | None] | None:
+    return None if values is None else to_nulls(values)
+
+
+def _floats_from_json(values: list[float | None] | None) -> list[float] | None:
+    return None if values is None else from_nulls(values).tolist()
