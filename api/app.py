@@ -27,7 +27,7 @@ from softevo.api.body_limit import BodyLimitMiddleware
 from softevo.api.coordinator import Coordinator
 from softevo.api.db import Database, alembic_config, current_revision
 from softevo.api.events import TooManyClientsError, Watches
-from softevo.api.routes import meta, runs, sweeps, views
+from softevo.api.routes import archive, meta, runs, sweeps, views
 from softevo.api.settings import Settings, get_settings
 from softevo.api.validation import RequestError
 from softevo.core.evaluator import Evaluator
@@ -123,6 +123,7 @@ def create_app(
     )
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.limits.max_body_bytes)
     app.include_router(runs.router)
+    app.include_router(archive.router)
     app.include_router(views.router)
     app.include_router(sweeps.router)
     app.include_router(meta.router)

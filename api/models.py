@@ -102,6 +102,8 @@ class Generation(Base):
     evaluations: Mapped[int] = mapped_column(Integer)
     saved: Mapped[int] = mapped_column(Integer)
     seconds: Mapped[float] = mapped_column(Float)  # wall time of this generation's evaluation
+    coverage: Mapped[float | None] = mapped_column(Float)  # runs with an archive (descriptors)
+    qd_score: Mapped[float | None] = mapped_column(Float)
     committed_at: Mapped[datetime] = mapped_column()
 
 

@@ -130,6 +130,10 @@ class CurveRow(BaseModel):
     saved: int
     failed: int
     std: float | None
+    coverage: float | None = Field(
+        None, description="runs with descriptors: filled fraction of the archive's cells"
+    )
+    qd_score: float | None = Field(None, description="and the sum of its elites' fitness")
 
 
 class Curve(BaseModel):
@@ -202,3 +206,30 @@ class Health(BaseModel):
 
 class Message(BaseModel):
     detail: str
+
+
+class DescriptorAxis(BaseModel):
+    name: str
+    low: float
+    high: float
+    bins: int
+    help: str
+
+
+class ArchiveCell(BaseModel):
+    cell: list[int] = Field(description="bin index along each descriptor")
+    values: list[float] = Field(description="the elite's descriptor values")
+    fitness: float
+    generation: int
+    index: int
+    id: int = Field(description="generation * population + index, for /individuals/{id}")
+    robot: dict[str, Any] | None = Field(None, description="its robot file, with ?robots=true")
+
+
+class ArchivePublic(BaseModel):
+    run_id: int
+    generations: int = Field(description="committed generations the archive has seen")
+    descriptors: list[DescriptorAxis]
+    coverage: float
+    qd_score: float
+    cells: list[ArchiveCell]

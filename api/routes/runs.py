@@ -28,7 +28,7 @@ from softevo.api.schemas import (
 )
 from softevo.api.validation import run_config
 from softevo.core.config import RunConfig
-from softevo.core.ga.stats import CURVE_COLUMNS
+from softevo.core.ga.stats import CURVE_COLUMNS, QD_COLUMNS
 from softevo.core.genome import Genome
 from softevo.core.robot_file import robot_to_json
 from softevo.core.status import IndividualStatus, RunStatus
@@ -146,24 +146,27 @@ def cancel_run(run_id: RunId, db: DatabaseDep, coordinator: CoordinatorDep) -> R
 
 
 def _csv(rows: list[dict[str, Any]]) -> str:
+    columns = CURVE_COLUMNS + (QD_COLUMNS if rows and "coverage" in rows[0] else ())
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(CURVE_COLUMNS)
+    writer.writerow(columns)
     for row in rows:
-        writer.writerow(["" if row[c] is None else repr(row[c]) for c in CURVE_COLUMNS])
+        writer.writerow(["" if row[c] is None else repr(row[c]) for c in columns])
     return buffer.getvalue()
 
 
 @router.get(
     "/{run_id}/curve",
     responses={**NOT_FOUND, 200: {"content": {"text/csv": {}}}},
+    response_model_exclude_unset=True,  # coverage and qd_score only for runs with an archive
 )
 def get_curve(
     run_id: RunId,
     db: DatabaseDep,
     format: Annotated[Literal["json", "csv"], Query()] = "json",
 ) -> Any:
-    """One row per committed generation: best, mean, median, min, best so far, diversity, ..."""
+    """One row per committed generation: best, mean, median, min, best so far, diversity, ...
+    (and coverage, qd_score for a run with descriptors)."""
     store.get_run(db, run_id)
     rows = store.curve(db, run_id)
     if format == "csv":

@@ -12,6 +12,7 @@ from softevo.api.store.runs import (
     NotFoundError,
     QueueFullError,
     RunRecord,
+    archive,
     best_individual,
     cancel_run,
     create_run,
@@ -27,7 +28,7 @@ from softevo.api.store.runs import (
 )
 
 __all__ = [
-    "ConflictError", "NotFoundError", "QueueFullError", "RunRecord", "best_individual",
+    "ConflictError", "NotFoundError", "QueueFullError", "RunRecord", "archive", "best_individual",
     "cancel_run", "create_run", "create_sweep", "curve", "curve_after", "driving",
     "get_individual", "get_run", "get_sweep", "leases", "list_individuals", "list_runs",
     "progress_counts",

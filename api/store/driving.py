@@ -220,6 +220,7 @@ def commit_generation(db: Database, run_id: int, lease: Lease, commit: Generatio
         connection.execute(
             insert(GENERATIONS),
             {"run_id": run_id, **{key: stats[key] for key in CURVE_FIELDS},
+             "coverage": stats.get("coverage"), "qd_score": stats.get("qd_score"),
              "seconds": commit.seconds, "committed_at": now()},
         )  # fmt: skip
         connection.execute(

@@ -173,7 +173,15 @@ def curve(db: Database, run_id: int) -> list[dict[str, Any]]:
         rows = session.scalars(
             select(Generation).where(Generation.run_id == run_id).order_by(Generation.generation)
         )
-        return [{column: getattr(row, column) for column in CURVE_COLUMNS} for row in rows]
+        return [_curve_row(row) for row in rows]
+
+
+def _curve_row(row: Generation) -> dict[str, Any]:
+    """The row of `CURVE_COLUMNS`, and `QD_COLUMNS` for a run with an archive."""
+    data = {column: getattr(row, column) for column in CURVE_COLUMNS}
+    if row.coverage is not None:
+        data.update(coverage=row.coverage, qd_score=row.qd_score)
+    return data
 
 
 def curve_after(db: Database, run_id: int, after: int) -> list[dict[str, Any]]:
@@ -184,7 +192,7 @@ def curve_after(db: Database, run_id: int, after: int) -> list[dict[str, Any]]:
             .where(Generation.run_id == run_id, Generation.generation > after)
             .order_by(Generation.generation)
         )
-        return [{column: getattr(row, column) for column in CURVE_COLUMNS} for row in rows]
+        return [_curve_row(row) for row in rows]
 
 
 def individual_json(row: Individual, population: int) -> dict[str, Any]:
@@ -275,3 +283,11 @@ def best_individual(db: Database, run: RunRecord) -> dict[str, Any] | None:
         if row is None:
             return None
         return {**individual_json(row, run.config["population"]), "genome": row.genome}
+
+
+def archive(db: Database, run_id: int) -> dict[str, Any] | None:
+    """The run's quality-diversity archive as of its last committed generation (the GA state's,
+    `softevo.core.ga.archive.Archive.to_json()`); None before the first commit."""
+    with db.read() as session:
+        state = session.scalar(select(Run.ga_state).where(Run.id == run_id))
+    return None if state is None else state.get("archive")

@@ -33,6 +33,9 @@ REQUEST: dict[str, Any] = {
     "population": 16,
     "sim": {"duration": 20.0},
 }
+#: The same run as MAP-Elites: its archive rides in the GA state the generation commit writes.
+QD_REQUEST = {**REQUEST, "algorithm": "map-elites", "descriptors": ["voxels", "actuated"],
+              "bins": [5, 5]}  # fmt: skip
 GENERATIONS = REQUEST["generations"]
 POPULATION = REQUEST["population"]
 #: The server is killed in the first generation from KILL_AT on caught half evaluated; the last
@@ -160,12 +163,13 @@ def _saved_fitness(engine: Engine, run_id: int, generation: int) -> list[tuple[A
 
 @pytest.mark.slow
 @pytest.mark.fault
+@pytest.mark.parametrize("request_body", [REQUEST, QD_REQUEST], ids=["ga", "map-elites"])
 def test_sigkill_mid_generation_then_restart_resumes_with_the_same_curve(
-    start_server: Callable[[], Server], engine: Engine
+    start_server: Callable[[], Server], engine: Engine, request_body: dict[str, Any]
 ) -> None:
     database = engine
     first = start_server()
-    created = first.client.post("/runs", json=REQUEST)
+    created = first.client.post("/runs", json=request_body)
     assert created.status_code == 201, created.text
     run_id = created.json()["id"]
 
@@ -249,14 +253,21 @@ def test_sigkill_mid_generation_then_restart_resumes_with_the_same_curve(
 
     # The learning curve is the undisturbed run's, to the last digit.
     curve = second.client.get(f"/runs/{run_id}/curve").json()["generations"]
-    evolution = Evolution.start(resolve(REQUEST))
+    evolution = Evolution.start(resolve(request_body))
     evolution.run(SerialEvaluator())
     expected = evolution.curve()
     assert len(curve) == len(expected) == GENERATIONS
-    for got, want in zip(curve, expected, strict=True):
-        assert {c: got[c] for c in CURVE_COLUMNS} == {c: want[c] for c in CURVE_COLUMNS}
+    assert curve == expected  # every column, coverage and qd_score too for MAP-Elites
     assert run["progress"]["evaluations"] == evolution.evaluations
     assert run["progress"]["saved"] == evolution.saved
+    if evolution.state.archive is not None:  # and the archive is the undisturbed run's
+        archive = second.client.get(f"/runs/{run_id}/archive").json()
+        assert [
+            (c["cell"], c["fitness"], c["generation"], c["index"]) for c in archive["cells"]
+        ] == [
+            (list(e.cell), e.fitness, e.generation, e.index)
+            for e in evolution.state.archive.ordered()
+        ]
 
 
 @pytest.mark.slow
