@@ -166,3 +166,28 @@ def test_a_queue_without_a_live_worker_is_said(redis_server, workers, tmp_path) 
         while client.get("/healthz").json()["workers"] != "ok":  # workers are counted every 5 s
             assert time.monotonic() < deadline + 80
             time.sleep(0.2)
+
+
+def test_a_map_elites_run_on_two_rq_workers_builds_the_serial_archive(
+    redis_server, workers
+) -> None:
+    """The archive and its curve columns do not depend on who simulated the robots."""
+    for name in ("left", "right"):
+        workers.start(name)
+    for name in ("left", "right"):
+        workers.wait_ready(name)
+    request = {
+        "preset": "quick", "population": 8, "generations": 3, "seed": 5, "shape": [2, 2, 2],
+        "algorithm": "map-elites", "descriptors": ["voxels", "soft"], "bins": [4, 4],
+        "sim": {"duration": 1.0},
+    }  # fmt: skip
+    serial = Evolution.start(resolve(request))
+    serial.run(SerialEvaluator())
+    on_rq = Evolution.start(resolve(request))
+    evaluator = RQEvaluator(redis_server.url)
+    try:
+        on_rq.run(evaluator)
+    finally:
+        evaluator.close()
+    assert on_rq.state.archive.to_json() == serial.state.archive.to_json()
+    assert on_rq.curve() == serial.curve() and serial.curve()[-1]["coverage"] > 0
