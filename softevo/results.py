@@ -8,6 +8,8 @@ interrupted run still has its partial results:
     state.json        the genetic algorithm's state (JSON), for inspection or resuming
     population.csv    every individual: generation, index, fitness (empty: failed), operator
     curve.png, population.png, diversity.png   the run's figures, written at the end
+    archive.json, archive.csv, archive.png     a run with descriptors: its MAP-Elites archive
+                      (one row per filled cell) and heat map
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from softevo.core.evolution import CURVE_COLUMNS, Evolution
+from softevo.core.ga.stats import QD_COLUMNS
 from softevo.core.robot_file import robot_to_json
 
 
@@ -56,12 +59,13 @@ def write_results(out: Path, evolution: Evolution) -> None:
     temporary = out / "curve.csv.tmp"
     with temporary.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle)
-        writer.writerow(CURVE_COLUMNS)
+        columns = CURVE_COLUMNS + (QD_COLUMNS if evolution.config.descriptors else ())
+        writer.writerow(columns)
         for row in result["generations"]:
             writer.writerow(
                 [
                     "" if v is None or (isinstance(v, float) and math.isnan(v)) else v
-                    for v in (row[c] for c in CURVE_COLUMNS)
+                    for v in (row[c] for c in columns)
                 ]
             )
     os.replace(temporary, out / "curve.csv")
@@ -110,3 +114,24 @@ def read_results(folder: Path) -> tuple[dict[str, Any], list[dict[str, Any]], li
                     }
                 )
     return curve.get("run", {}), curve.get("generations", []), individuals
+
+
+def write_archive(out: Path, evolution: Evolution) -> dict[str, Any] | None:
+    """archive.json (the archive as the GA state holds it) and archive.csv (one row per filled
+    cell) of a run with descriptors; None for a run without."""
+    archive = evolution.state.archive
+    if archive is None:
+        return None
+    data = archive.to_json()
+    _write_json(out / "archive.json", data)
+    temporary = out / "archive.csv.tmp"
+    with temporary.open("w", newline="", encoding="utf-8") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(["cell", *data["descriptors"], "fitness", "generation", "index", "genome"])
+        for elite in archive.ordered():
+            writer.writerow(
+                ["-".join(map(str, elite.cell)), *elite.values, elite.fitness, elite.generation,
+                 elite.index, elite.genome.hash]
+            )  # fmt: skip
+    os.replace(temporary, out / "archive.csv")
+    return data

@@ -12,10 +12,18 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
 from softevo.core import figures
+from softevo.core.archive_figures import archive_figure
 from softevo.core.config import PRESET_DESCRIPTIONS, PRESETS, ConfigError, resolve
 from softevo.core.evolution import Evolution
+from softevo.core.ga.descriptors import CATALOGUE
 from softevo.core.objectives import OBJECTIVES
-from softevo.results import append_population, read_results, summary, write_results
+from softevo.results import (
+    append_population,
+    read_results,
+    summary,
+    write_archive,
+    write_results,
+)
 
 
 def add_parser(commands: Any) -> None:
@@ -49,6 +57,19 @@ def add_parser(commands: Any) -> None:
         "task-* presets come with theirs",
     )  # fmt: skip
     run.add_argument(
+        "--algorithm", choices=["ga", "random", "hillclimb", "map-elites"],
+        help="ga (the preset's), random or hillclimb (baselines), map-elites (quality-diversity "
+        "over --descriptors: writes archive.csv, archive.json and the archive.png heat map)",
+    )  # fmt: skip
+    run.add_argument(
+        "--descriptors", type=_names, metavar="A,B",
+        help="MAP-Elites descriptors, e.g. voxels,actuated: " + "; ".join(
+            f"{d.name}: {d.help}" for d in CATALOGUE.values()),
+    )  # fmt: skip
+    run.add_argument(
+        "--bins", type=_counts, metavar="N,M", help="cells along each descriptor, e.g. 10,10"
+    )
+    run.add_argument(
         "--workers", type=int, metavar="W", help="processes (default: one per core; 1 = serial)"
     )
     run.add_argument("--out", metavar="DIR", help="output folder (softevo-runs/PRESET-seedN)")
@@ -58,7 +79,8 @@ def add_parser(commands: Any) -> None:
 
 def _request(args: argparse.Namespace) -> dict[str, Any]:
     request: dict[str, Any] = {"preset": args.preset, "seed": args.seed}
-    for name in ("shape", "encoding", "population", "generations"):
+    for name in ("shape", "encoding", "population", "generations", "algorithm", "descriptors",
+                 "bins"):  # fmt: skip
         if getattr(args, name) is not None:
             request[name] = getattr(args, name)
     if args.objective is not None:
@@ -67,6 +89,17 @@ def _request(args: argparse.Namespace) -> dict[str, Any]:
     if any(value is not None for value in sim.values()):
         request["sim"] = {key: value for key, value in sim.items() if value is not None}
     return request
+
+
+def _names(text: str) -> list[str]:
+    return [part.strip() for part in text.split(",") if part.strip()]
+
+
+def _counts(text: str) -> list[int]:
+    try:
+        return [int(part) for part in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected counts like 10,10, got {text!r}") from None
 
 
 def terrain_json(text: str) -> dict[str, Any]:
@@ -146,6 +179,11 @@ def run_command(args: argparse.Namespace) -> int:
     figures.run_figures(
         curve, individuals, out, figures.run_title(as_stored), figures.fitness_label(as_stored)
     )
+    archive = write_archive(out, evolution)
+    if archive is not None:
+        title = f"MAP-Elites archive: {figures.run_title(as_stored)}"
+        figure = archive_figure(archive, title, figures.fitness_label(as_stored))
+        figures.save(figure, out / "archive.png")
     _print_summary(args, evolution, out)
     return 0
 
