@@ -1,5 +1,6 @@
 // One run, live: its curve, population dot plot, diversity and the 3D replay of the best robot.
 import { CURVE_SERIES, GENERATION_AXIS, api, box, chart, fmt, h, objective, onLeave, progressBar, softevo, status, terrainText, view } from "./api.js";
+import { ArchiveMap } from "./archive.js";
 import { Replay } from "./replay.js";
 import { cancelButton } from "./runs.js";
 
@@ -116,6 +117,22 @@ export async function runView(runId) {
 
   const replay = new Replay(replayPanel);
   onLeave(() => replay.dispose());
+
+  // quality-diversity: the archive's heat map, and coverage and QD-score beside the curve
+  const qd = run.config.descriptors && run.config.descriptors.length > 0;
+  const qdData = (key) => [curve.map((r) => r.generation), curve.map((r) => r[key] ?? null)];
+  const qdCharts = qd ? [["coverage", "Archive coverage (filled fraction of the cells)", "#16a085"],
+    ["qd_score", `QD-score (sum of the elites' ${fitness.name})`, "#c0392b"]].map(([key, title, stroke]) => [key, chart(key, title, {
+    scales: { x: { time: false } }, axes: [GENERATION_AXIS, { label: key, size: 60 }],
+    series: [{ label: "generation" }, { label: key, stroke, width: 1.5 }],
+  }, qdData(key), charts)]) : [];
+  const archive = qd ? new ArchiveMap(charts, runId, fitness, (cell) => {
+    replay.best = null;  // a picked elite stays on screen while the run goes on
+    replay.load(`/runs/${runId}/individuals/${cell.id}/replay`,
+      () => `elite of cell ${cell.cell.join(", ")} (generation ${cell.generation}, index ${cell.index})`)
+      .catch((error) => replayPanel.append(h("p", { class: "error" }, error.message)));
+  }) : null;
+  if (archive) await archive.update();
   const showBest = async () => {
     const label = ["completed", "failed", "cancelled"].includes(run.status) ? "the fastest robot" : "the fastest robot so far";
     // named from the replay itself: a better robot may have been committed since `run` was read
@@ -139,6 +156,8 @@ export async function runView(runId) {
       curvePlot.setData(curveData());
       dotPlot.setData(dotData());
       diversityPlot.setData([curve.map((r) => r.generation), curve.map((r) => r.diversity)]);
+      for (const [key, plot] of qdCharts) plot.setData(qdData(key));
+      if (archive) await archive.update();
       showSummary();
       // follow the fastest robot as it changes, unless the user picked an individual
       const stale = !replay.loaded || (replay.best !== null && replay.best !== run.progress.best_generation);

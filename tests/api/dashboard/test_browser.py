@@ -310,3 +310,41 @@ def test_the_token_is_asked_for_and_kept(page: Any, tmp_path: Path) -> None:
         page.reload()  # the token survives a reload
         page.wait_for_selector("#start-form")
         assert page.input_value("#token") == "s3cret"
+
+
+def test_a_map_elites_run_shows_its_archive_and_replays_a_picked_elite(
+    page: Any, server: httpx.Client
+) -> None:
+    body = {**SMALL, "algorithm": "map-elites", "descriptors": ["voxels", "actuated"],
+            "bins": [6, 5], "generations": 5}  # fmt: skip
+    run_id = server.post("/runs", json=body).json()["id"]
+    wait(lambda: server.get(f"/runs/{run_id}").json()["status"] == "completed", 60, "QD run")
+    page.goto(f"{page.base}/#/runs/{run_id}")
+    page.wait_for_function(
+        "window.softevo.archive && window.softevo.replay && window.softevo.replay.frames > 0",
+        timeout=30000,
+    )
+    archive = server.get(f"/runs/{run_id}/archive").json()
+    assert page.evaluate("window.softevo.archive.cells.length") == len(archive["cells"]) > 1
+    curve = server.get(f"/runs/{run_id}/curve").json()["generations"]
+    assert page.evaluate("window.softevo.charts.coverage.data[1]") == [r["coverage"] for r in curve]
+    assert page.evaluate("window.softevo.charts.qd_score.data[1]") == [r["qd_score"] for r in curve]
+    # a filled cell drawn where the archive says: a click on its centre replays that elite
+    elite = max(archive["cells"], key=lambda c: c["fitness"])
+    point = page.evaluate(
+        """([i, j]) => {
+        const canvas = document.querySelector('canvas.archive');
+        canvas.scrollIntoView({block: "center"});
+        const r = canvas.getBoundingClientRect(), s = r.width / canvas.width;
+        const left = 48, top = 8, w = (canvas.width - 56) / 6, hgt = (canvas.height - 48) / 5;
+        return [r.left + (left + (i + 0.5) * w) * s, r.top + (top + (4 - j + 0.5) * hgt) * s];
+    }""",
+        elite["cell"],
+    )
+    page.mouse.click(*point)
+    page.wait_for_function(
+        f"window.softevo.replay.label.startsWith('elite of cell {elite['cell'][0]}, "
+        f"{elite['cell'][1]}')",
+        timeout=15000,
+    )
+    shot(page, "dashboard-archive")
