@@ -8,6 +8,9 @@ every CPU second the run's process spends is the coordinator's: breeding, robot 
 store's writes and the generation commits. Each run is a fresh interpreter. Prints CPU per
 individual (ms), wall time per generation and generations of 25 committed per second.
 
+`--algorithms ga,map-elites` measures MAP-Elites runs (descriptors voxels and actuated, 10 x 10
+cells) interleaved with the GA's and prints MAP-Elites' CPU per individual against the GA's.
+
 `--tree PATH` also measures another checkout (an older commit in a `git worktree`, of today's
 layout or of the old one with top-level `core` and `api`), its runs interleaved with this
 checkout's in the same invocation, and prints the ratio: the same runs, the same evaluator, each
@@ -95,13 +98,25 @@ def instant_evaluator(found: dict[str, Any], sim_seconds: float = 0.0) -> Any:
     return Instant()
 
 
+#: What each `--algorithms` entry adds to the paper-voxel run.
+ALGORITHMS: dict[str, dict[str, Any]] = {
+    "ga": {},
+    "map-elites": {
+        "algorithm": "map-elites",
+        "descriptors": ["voxels", "actuated"],
+        "bins": [10, 10],
+    },
+}
+
+
 def drive(
-    found: dict[str, Any], url: str, generations: int, sim_seconds: float
+    found: dict[str, Any], url: str, generations: int, sim_seconds: float, algorithm: str = "ga"
 ) -> tuple[float, float, int]:
     """One run to completion: (CPU seconds of this process, wall seconds, individuals)."""
     database = found["db"].Database(url)
     database.upgrade()
-    config = found["resolve"]({"preset": "paper-voxel", "seed": 1, "generations": generations})
+    request = {"preset": "paper-voxel", "seed": 1, "generations": generations}
+    config = found["resolve"]({**request, **ALGORITHMS[algorithm]})
     run = found["create_run"](database, config)
     coordinator = found["Coordinator"](
         database, instant_evaluator(found, sim_seconds), batch_size=4
@@ -126,18 +141,21 @@ def drive(
     return cpu, wall, config.population * generations
 
 
-def measure_once(tree: str | None, database: str, generations: int, sim_seconds: float) -> None:
+def measure_once(
+    tree: str | None, database: str, generations: int, sim_seconds: float, algorithm: str
+) -> None:
     """One run in this process (of this checkout, or of `tree` when it is on the path); prints
     its CPU seconds, wall seconds and individuals as JSON."""
     found = modules(tree)
     with tempfile.TemporaryDirectory() as folder:  # warm up: a long-lived service pays imports
-        drive(found, f"sqlite:///{Path(folder) / 'warm.db'}", 3, 0.0)  # and first calls once
+        drive(found, f"sqlite:///{Path(folder) / 'warm.db'}", 3, 0.0, algorithm)  # and first calls
     if database == "sqlite":
         with tempfile.TemporaryDirectory() as folder:
-            row = drive(found, f"sqlite:///{Path(folder) / 'b.db'}", generations, sim_seconds)
+            url = f"sqlite:///{Path(folder) / 'b.db'}"
+            row = drive(found, url, generations, sim_seconds, algorithm)
     else:
         with found["db"].scratch_postgres(POSTGRES, "softevo_bench") as url:
-            row = drive(found, url, generations, sim_seconds)
+            row = drive(found, url, generations, sim_seconds, algorithm)
     print(json.dumps(row))
 
 
@@ -154,12 +172,12 @@ def stage(tree: str) -> str:
 
 
 def run_once(
-    label: str, path: str | None, database: str, args: argparse.Namespace
+    label: str, path: str | None, database: str, args: argparse.Namespace, algorithm: str = "ga"
 ) -> tuple[float, float, int]:
     """One run in a fresh interpreter (so neither tree's imports or caches help the other)."""
     command = [
         sys.executable, "-P", __file__, "--once", database, "--generations", str(args.generations),
-        "--sim-seconds", str(args.sim_seconds),
+        "--sim-seconds", str(args.sim_seconds), "--algorithms", algorithm,
     ]  # fmt: skip
     env = dict(os.environ)
     if path is not None:
@@ -181,10 +199,17 @@ def main() -> None:
         help="simulated seconds of wall time per robot (slept, no CPU; 0: instant)",
     )  # fmt: skip
     parser.add_argument("--tree", help="also measure the checkout at this path, interleaved")
+    parser.add_argument(
+        "--algorithms", default="ga", help="comma-separated: ga (default), map-elites"
+    )
     parser.add_argument("--once", choices=["sqlite", "postgres"], help=argparse.SUPPRESS)
     args = parser.parse_args()
+    algorithms = args.algorithms.split(",")
     if args.once:
-        measure_once(args.tree, args.once, args.generations, args.sim_seconds)
+        measure_once(args.tree, args.once, args.generations, args.sim_seconds, algorithms[0])
+        return
+    if len(algorithms) > 1:
+        compare_algorithms(args, algorithms)
         return
     trees: list[tuple[str, str | None]] = [("this checkout", None)]
     if args.tree:
@@ -213,6 +238,28 @@ def main() -> None:
         if len(trees) == 2:
             ratio = cpu_of[trees[0][0]] / cpu_of["this checkout"]
             print(f"{database:9} this checkout: {ratio:.2f}x less CPU per individual")
+
+
+def compare_algorithms(args: argparse.Namespace, algorithms: list[str]) -> None:
+    """This checkout's CPU per individual for each algorithm, runs interleaved, and each
+    against the first's."""
+    print(
+        f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+        f"Python {platform.python_version()}, {args.generations} generations of 25, "
+        f"{args.sim_seconds:g} s per robot, median of {args.repeats} (algorithms interleaved)"
+    )
+    print("database  algorithm           CPU/individual  wall/generation  / first's CPU")
+    for database in ("sqlite", "postgres"):
+        rows: dict[str, list[tuple[float, float, int]]] = {name: [] for name in algorithms}
+        for _ in range(args.repeats):
+            for name in algorithms:
+                rows[name].append(run_once(name, None, database, args, name))
+        first = statistics.median(c / n for c, _, n in rows[algorithms[0]]) * 1e3
+        for name in algorithms:
+            cpu = statistics.median(c / n for c, _, n in rows[name]) * 1e3
+            wall = statistics.median(w / args.generations for _, w, _ in rows[name])
+            print(f"{database:9} {name:18} {cpu:11.3f} ms  {wall * 1e3:12.2f} ms  "
+                  f"{cpu / first:12.2f}")  # fmt: skip
 
 
 if __name__ == "__main__":
