@@ -31,7 +31,7 @@ class _RunSettings(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     preset: str = Field("paper-voxel", description="preset whose settings the others override")
-    encoding: Literal["voxel", "cube-springs", "spring"] | None = None
+    encoding: Literal["voxel", "voxel-phase", "cube-springs", "spring"] | None = None
     sim: dict[str, Number | Terrain] | None = Field(
         None,
         max_length=32,

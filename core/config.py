@@ -36,7 +36,7 @@ class RunConfig(GAConfig):
     """Everything that defines a run: encoding, bounding box, seed, GA and simulation settings."""
 
     preset: str | None = None
-    encoding: Literal["voxel", "cube-springs", "spring"] = "voxel"
+    encoding: Literal["voxel", "voxel-phase", "cube-springs", "spring"] = "voxel"
     shape: tuple[int, int, int] = (4, 4, 4)
     seed: int = Field(0, ge=0, le=2**63 - 1)
     sim: SimSettings = Field(default_factory=SimSettings)
@@ -79,9 +79,9 @@ class RunConfig(GAConfig):
             )
         if self.encoding == "cube-springs" and len(self.cube_options) < 2:
             raise ValueError("cube_options: at least two options are needed to evolve")
-        if self.descriptors and self.encoding != "voxel":
+        if self.descriptors and self.encoding not in ("voxel", "voxel-phase"):
             raise ValueError(
-                f"descriptors: defined on voxel labels, so only for the voxel encoding, not "
+                f"descriptors: defined on voxel labels, so only for the voxel encodings, not "
                 f"{self.encoding}"
             )
         omegas = {w for _, b, w, _ in self.cube_options if b != 0}

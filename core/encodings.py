@@ -2,6 +2,8 @@
 
 * `voxel` (paper phase 3): one label per voxel of the bounding box (empty, soft, hard, sine,
   neg_sine) and the actuation genes a, b, c.
+* `voxel-phase` (co-design): `voxel` where every voxel also carries its own actuation phase and
+  amplitude, so the gait evolves with the body; the paper's sine / neg_sine are phases 0 and pi.
 * `cube-springs` (paper phase 2): one cube; each of its 28 springs picks one of a few [k, b, w, c]
   options.
 * `spring` (beyond the paper, its stated future work): which voxels are filled, plus one material
@@ -65,6 +67,9 @@ class Encoding(ABC):
     name: str
     segments: tuple[Segment, ...]
     real_bounds: np.ndarray  # [R, 2] low, high
+    #: Real genes that belong to the robot as a whole come first; then `voxel_reals` blocks of
+    #: one real gene per voxel, which crossover cuts where it cuts the labels (co-design).
+    voxel_reals: int = 0
 
     @property
     def n_discrete(self) -> int:
@@ -147,6 +152,8 @@ class VoxelEncoding(Encoding):
     def from_robot(self, robot: Robot) -> Genome:
         if not isinstance(robot, VoxelRobot) or robot.shape != self.shape:
             raise EncodingError(f"not a {'x'.join(map(str, self.shape))} voxel robot")
+        if robot.phases is not None or robot.amplitudes is not None:
+            raise EncodingError("a robot with per-voxel phases is of the voxel-phase encoding")
         return self.genome(np.array(_index(robot.voxels, LABELS, "label")), _actuation_genes(robot))
 
 
@@ -169,6 +176,46 @@ class CubeSpringsEncoding(Encoding):
             raise EncodingError("not a one-cube robot with per-spring options")
         rows = tuple(tuple(float(v) for v in row) for row in np.asarray(robot.springs))
         return self.genome(np.array(_index(rows, self.options, "spring option")), ())
+
+
+#: Bounds of a voxel's own phase (rad) in the `voxel-phase` encoding: one turn.
+PHASE_BOUNDS = (-math.pi, math.pi)
+
+
+class VoxelPhaseEncoding(Encoding):
+    """`voxel` with co-designed gaits: the labels, then real genes a and c of the robot, every
+    voxel's own amplitude (the paper's b bounds) and every voxel's own phase (one turn). Only
+    actuated voxels use theirs; crossover cuts a voxel's amplitude and phase with its label."""
+
+    name = "voxel-phase"
+    voxel_reals = 2
+
+    def __init__(self, shape: tuple[int, int, int]) -> None:
+        self.shape = shape
+        n_voxels = math.prod(shape)
+        self.segments = (Segment(0, n_voxels, len(LABELS)),)
+        self.real_bounds = np.array(
+            [GENE_BOUNDS["a"], GENE_BOUNDS["c"], *[GENE_BOUNDS["b"]] * n_voxels,
+             *[PHASE_BOUNDS] * n_voxels]
+        )  # fmt: skip
+
+    def to_robot(self, genome: Genome, sim: SimSettings) -> VoxelRobot:
+        self.check(genome)
+        n = self.n_discrete
+        a, c = genome.real[:2]
+        amplitudes, phases = genome.real[2 : 2 + n], genome.real[2 + n :]
+        labels = tuple(LABELS[g] for g in genome.discrete)
+        return VoxelRobot(self.shape, labels, Actuation(a, 0.0, c), sim, phases, amplitudes)
+
+    def from_robot(self, robot: Robot) -> Genome:
+        """Also of a plain `voxel` robot: phase 0 and the robot's b on every voxel."""
+        if not isinstance(robot, VoxelRobot) or robot.shape != self.shape:
+            raise EncodingError(f"not a {'x'.join(map(str, self.shape))} voxel robot")
+        n = self.n_discrete
+        amplitudes = robot.amplitudes or (robot.actuation.b,) * n
+        phases = robot.phases or (0.0,) * n
+        real = (robot.actuation.a, robot.actuation.c, *amplitudes, *phases)
+        return self.genome(np.array(_index(robot.voxels, LABELS, "label")), real)
 
 
 class SpringEncoding(Encoding):
@@ -216,8 +263,10 @@ def make_encoding(
     """The encoding called `name` for a bounding box of `shape`."""
     if name == "voxel":
         return VoxelEncoding(shape)
+    if name == "voxel-phase":
+        return VoxelPhaseEncoding(shape)
     if name == "spring":
         return SpringEncoding(shape)
     if name == "cube-springs":
         return CubeSpringsEncoding(cube_options)
-    raise EncodingError(f"unknown encoding {name!r} (voxel, cube-springs, spring)")
+    raise EncodingError(f"unknown encoding {name!r} (voxel, voxel-phase, cube-springs, spring)")

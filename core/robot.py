@@ -50,12 +50,19 @@ class Actuation:
 
 @dataclass(frozen=True, eq=False)
 class VoxelRobot:
-    """A grid of labelled voxels; labels are listed x fastest, then y, then z."""
+    """A grid of labelled voxels; labels are listed x fastest, then y, then z.
+
+    Co-designed gaits (the `voxel-phase` encoding) give every voxel its own `phases` (rad,
+    added to the robot's c) and `amplitudes` (in place of the robot's b); only actuated voxels
+    use theirs. Without them every actuated voxel shares the robot's genes, as in the paper,
+    whose sine / neg_sine are phases 0 and pi."""
 
     shape: tuple[int, int, int]
     voxels: tuple[str, ...]
     actuation: Actuation = Actuation()
     sim: SimSettings = field(default_factory=SimSettings)
+    phases: tuple[float, ...] | None = None
+    amplitudes: tuple[float, ...] | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -170,8 +177,45 @@ def _voxel_mechanics(robot: VoxelRobot) -> Mechanics:
     weighted_offset = np.bincount(spring, weights=voxel_k[voxel] * voxel_offset[voxel], minlength=n)
     weighted_amp = np.bincount(spring, weights=voxel_k[voxel] * voxel_amp[voxel], minlength=n)
     safe_k = np.where(k > 0, k, 1.0)
+    if robot.phases is not None:
+        return _phased_mechanics(robot, lattice, k, weighted_offset / safe_k, spring, voxel)
     return _labelled_mechanics(
         lattice, k, weighted_offset / safe_k, weighted_amp / safe_k, robot.actuation, robot.sim
+    )
+
+
+def _phased_mechanics(
+    robot: VoxelRobot,
+    lattice: Lattice,
+    k: np.ndarray,
+    offset: np.ndarray,
+    spring: np.ndarray,
+    voxel: np.ndarray,
+) -> Mechanics:
+    """Mechanics of a robot whose actuated voxels each have a phase and amplitude: voxel v's
+    spring term k_v b_v sin(w t + c + phi_v) splits into sin(w t) and cos(w t) parts, summed
+    over the voxels sharing the spring like the paper's single phase (same parallel rule)."""
+    sim, n = robot.sim, lattice.n_springs
+    sign = np.array([{"sine": 1.0, "neg_sine": -1.0}.get(v, 0.0) for v in robot.voxels])
+    genes = np.full(len(sign), robot.actuation.b)
+    if robot.amplitudes is not None:
+        genes = np.asarray(robot.amplitudes, dtype=np.float64)
+    stiffness = np.array([sim.actuated_stiffness if s else 0.0 for s in sign])
+    amplitude = sim.amplitude_scale * sign * genes * stiffness
+    phase = robot.actuation.c + np.asarray(robot.phases, dtype=np.float64)
+    safe_k = np.where(k > 0, k, 1.0)
+    length = lattice.spring_lengths * sim.edge_length
+    part_sin = np.bincount(spring, weights=(amplitude * np.cos(phase))[voxel], minlength=n)
+    part_cos = np.bincount(spring, weights=(amplitude * np.sin(phase))[voxel], minlength=n)
+    return Mechanics(
+        lattice=lattice,
+        positions=_initial_positions(lattice, sim),
+        stiffness=k,
+        rest_length=length * (1.0 + offset),
+        amp_sin=length * part_sin / safe_k,
+        amp_cos=length * part_cos / safe_k,
+        omega=sim.omega if np.any(amplitude != 0) else 0.0,
+        sim=sim,
     )
 
 

@@ -7,6 +7,10 @@
      "sim": {"dt": .., ...},                 # overrides of the default SimSettings
      "objective": "speed"}                   # optional: the measure that is its fitness
 
+A co-designed robot (the `voxel-phase` encoding) adds "phases" (rad, added to c) and, optionally,
+"amplitudes" (in place of b): one number per voxel, null on every voxel that is not actuated.
+Files without them load as they always did.
+
 A robot whose springs carry their own [k, b, w, c] (the paper's phase 2 cube) lists them under
 "springs" in the canonical spring order of `softevo.core.lattice`, instead of material labels.
 A robot of the `spring` encoding gives "spring_labels": one of soft, hard, sine, neg_sine for
@@ -31,6 +35,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 from softevo.core.limits import MAX_FILE_BYTES, MAX_SIDE, MAX_VOXELS
 from softevo.core.objectives import Objective
 from softevo.core.robot import (
+    ACTUATED_LABELS,
     GENE_BOUNDS,
     LABELS,
     Actuation,
@@ -86,6 +91,8 @@ class _RobotModel(BaseModel):
     actuation: _ActuationModel | None = None
     sim: dict[str, Any] = Field(default_factory=dict)
     objective: Objective | None = None  # what the robot's fitness is (absent: speed)
+    phases: list[Number | None] | None = Field(None, max_length=MAX_VOXELS)
+    amplitudes: list[Number | None] | None = Field(None, max_length=MAX_VOXELS)
 
     @field_validator("shape")
     @classmethod
@@ -112,6 +119,25 @@ def _occupancy(voxels: list[str] | None, n_voxels: int) -> tuple[bool, ...]:
     labels = voxels if voxels is not None else ["filled"] * n_voxels
     _check_labels(labels, ("empty", "filled"))
     return tuple(label == "filled" for label in labels)
+
+
+def _per_voxel(
+    values: list[float | None] | None, field: str, voxels: list[str], bounds: tuple[float, float]
+) -> tuple[float, ...] | None:
+    """A per-voxel list: a number on every actuated voxel, null on every other (stored as 0)."""
+    if values is None:
+        return None
+    if len(values) != len(voxels):
+        raise _refuse(field, f"expected {len(voxels)} values, one per voxel, got {len(values)}")
+    for index, (value, label) in enumerate(zip(values, voxels, strict=True)):
+        actuated = label in ACTUATED_LABELS
+        if actuated and value is None:
+            raise _refuse(f"{field}.{index}", f"a number is needed on a {label} voxel")
+        if not actuated and value is not None:
+            raise _refuse(f"{field}.{index}", f"must be null on a {label} voxel (not actuated)")
+        if value is not None and not bounds[0] <= value <= bounds[1]:
+            raise _refuse(f"{field}.{index}", f"{value} is outside [{bounds[0]}, {bounds[1]}]")
+    return tuple(0.0 if value is None else float(value) for value in values)
 
 
 def file_objective(data: dict[str, Any]) -> str:
@@ -145,6 +171,9 @@ def parse_robot(data: Any) -> Robot:
     genes = model.actuation or _ActuationModel()
     actuation = Actuation(genes.a, genes.b, genes.c)
     robot: Robot
+    per_spring = model.springs is not None or model.spring_labels is not None
+    if per_spring and (model.phases is not None or model.amplitudes is not None):
+        raise _refuse("phases", "per-voxel phases need voxel labels, not per-spring parameters")
     if model.spring_labels is not None:
         filled = _occupancy(model.voxels, n_voxels)
         robot = LabelledSpringRobot(shape, filled, tuple(model.spring_labels), actuation, sim)
@@ -164,7 +193,11 @@ def parse_robot(data: Any) -> Robot:
         if model.voxels is None:
             raise _refuse("voxels", "required (or give per-spring parameters in 'springs')")
         _check_labels(model.voxels, LABELS)
-        robot = VoxelRobot(shape, tuple(model.voxels), actuation, sim)
+        phases = _per_voxel(model.phases, "phases", model.voxels, (-math.inf, math.inf))
+        amplitudes = _per_voxel(model.amplitudes, "amplitudes", model.voxels, GENE_BOUNDS["b"])
+        if amplitudes is not None and phases is None:
+            raise _refuse("amplitudes", "only with 'phases' (a co-designed robot)")
+        robot = VoxelRobot(shape, tuple(model.voxels), actuation, sim, phases, amplitudes)
     try:  # what only the lattice knows: an empty grid, a spring count, a spring label
         build_mechanics(robot)
     except RobotError as error:
@@ -204,6 +237,13 @@ def robot_to_json(robot: Robot) -> dict[str, Any]:
         document["voxels"] = list(robot.voxels)
         genes = robot.actuation
         document["actuation"] = {"a": genes.a, "b": genes.b, "c": genes.c}
+        for key in ("phases", "amplitudes"):  # co-designed robots only: others stay as they were
+            values = getattr(robot, key)
+            if values is not None:
+                document[key] = [
+                    v if label in ACTUATED_LABELS else None
+                    for v, label in zip(values, robot.voxels, strict=True)
+                ]
     elif isinstance(robot, LabelledSpringRobot):
         document["voxels"] = ["filled" if f else "empty" for f in robot.filled]
         document["spring_labels"] = list(robot.spring_labels)

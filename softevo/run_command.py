@@ -42,7 +42,10 @@ def add_parser(commands: Any) -> None:
         "--preset", default="quick", choices=sorted(PRESETS), help=f"(quick) {presets}"
     )
     run.add_argument("--shape", metavar="NXxNYxNZ", help="bounding box, e.g. 5x5x3")
-    run.add_argument("--encoding", choices=["voxel", "cube-springs", "spring"])
+    run.add_argument(
+        "--encoding", choices=["voxel", "voxel-phase", "cube-springs", "spring"],
+        help="voxel-phase: every actuated voxel evolves its own phase and amplitude (co-design)",
+    )  # fmt: skip
     run.add_argument("--seed", type=int, default=0, help="random seed (0)")
     run.add_argument("--population", type=int, metavar="P")
     run.add_argument("--generations", type=int, metavar="G")

@@ -294,10 +294,15 @@ class GeneticAlgorithm:
         operator = "copy"
         if rng.random() < config.crossover_probability:
             operator = "crossover"
+            cut = (0, 0)
             for segment in encoding.segments:
                 part = slice(segment.start, segment.stop)
-                a[part], b[part], _ = operators.two_point_crossover(a[part], b[part], rng)
-            ra, rb, _ = operators.two_point_crossover(ra, rb, rng)
+                a[part], b[part], cut = operators.two_point_crossover(a[part], b[part], rng)
+            if encoding.voxel_reals:  # a voxel's own genes go with its label: the same cut
+                robot = len(ra) - encoding.voxel_reals * encoding.n_discrete
+                ra, rb = _cut_with_labels(ra, rb, cut, robot, encoding.n_discrete, rng)
+            else:
+                ra, rb, _ = operators.two_point_crossover(ra, rb, rng)
         children = []
         for k, (discrete, real) in enumerate(((a, ra), (b, rb))):
             label = operator
@@ -312,3 +317,22 @@ class GeneticAlgorithm:
             )
             children.append(Individual(encoding.genome(discrete, real), label, parents))
         return children
+
+
+def _cut_with_labels(
+    ra: np.ndarray,
+    rb: np.ndarray,
+    cut: tuple[int, int],
+    robot: int,
+    n_voxels: int,
+    rng: np.random.Generator,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Crossover of co-design genes: the robot's own `robot` real genes (before the per-voxel
+    blocks) by their own two-point cut; every per-voxel block swapped over the labels' cut."""
+    ra, rb = ra.copy(), rb.copy()
+    ra[:robot], rb[:robot], _ = operators.two_point_crossover(ra[:robot], rb[:robot], rng)
+    i, j = cut
+    for start in range(robot, len(ra), n_voxels):
+        block = slice(start + i, start + j)
+        ra[block], rb[block] = rb[block].copy(), ra[block].copy()
+    return ra, rb

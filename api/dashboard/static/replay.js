@@ -65,11 +65,18 @@ export class Replay {
     const slider = h("input", { type: "range", min: 0, max: data.frames.length - 1, value: 0, id: "replay-slider" });
     const speed = h("select", { id: "replay-speed" }, [0.25, 0.5, 1, 2, 4].map((s) => h("option", { value: s, selected: s === 1 }, `${s}×`)));
     const clock = h("span", { class: "muted", id: "replay-clock" }, "0.00 s");
+    // a co-designed robot (voxel-phase) has more than the paper's two phases: colour by hue
+    const phases = new Set((data.phase || []).filter((p) => p !== null).map((p) => p.toFixed(4)));
+    const byHue = phases.size > 2;
+    state.phaseColours = byHue ? "hue" : "two";
     const legend = h("div", { class: "muted" },
       "springs:", h("span", { class: "legend-swatch", style: "background:#9bc59d" }), "soft",
       h("span", { class: "legend-swatch", style: "background:#4a4f55" }), "hard",
-      h("span", { class: "legend-swatch", style: "background:#d1495b" }), "actuated (sine)",
-      h("span", { class: "legend-swatch", style: "background:#2f6fb5" }), "actuated (anti-phase)");
+      ...(byHue
+        ? [h("span", { class: "legend-swatch", style: "background:linear-gradient(90deg,#e33,#ee3,#3e3,#3ee,#33e,#e3e,#e33)" }),
+          `actuated, coloured by phase (hue: 0 → 2π; ${phases.size} phases)`]
+        : [h("span", { class: "legend-swatch", style: "background:#d1495b" }), "actuated (sine)",
+          h("span", { class: "legend-swatch", style: "background:#2f6fb5" }), "actuated (anti-phase)"]));
     this.panel.replaceChildren(title, facts, holder, h("div", { class: "controls" }, play, slider, speed, clock), legend);
 
     const state = this.state;
@@ -107,7 +114,9 @@ export class Replay {
     springs.forEach((_, s) => {
       const phase = data.phase ? data.phase[s] : null;
       let colour;
-      if (phase !== null && phase !== undefined) colour = Math.cos(phase) >= 0 ? IN_PHASE : ANTI_PHASE;
+      if (phase !== null && phase !== undefined && byHue) {
+        colour = new THREE.Color().setHSL((((phase / (2 * Math.PI)) % 1) + 1) % 1, 0.75, 0.5);
+      } else if (phase !== null && phase !== undefined) colour = Math.cos(phase) >= 0 ? IN_PHASE : ANTI_PHASE;
       else colour = PASSIVE_SOFT.clone().lerp(PASSIVE_HARD, high > low ? (stiffness[s] - low) / (high - low) : 1);
       colours.set([colour.r, colour.g, colour.b, colour.r, colour.g, colour.b], s * 6);
     });

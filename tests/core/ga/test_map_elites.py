@@ -121,7 +121,7 @@ def test_a_ga_with_descriptors_breeds_as_without_and_keeps_an_archive_beside() -
         ({"descriptors": ["voxels", "legs"]}, "unknown ['legs']"),
         ({"bins": [4]}, "bins: one count per descriptor"),
         ({"bins": [200, 200]}, "40000 cells"),
-        ({"preset": "paper-cube"}, "only for the voxel encoding"),
+        ({"preset": "paper-cube"}, "only for the voxel encodings"),
     ],
 )
 def test_a_bad_archive_is_refused_naming_the_field(change: dict, message: str) -> None:
