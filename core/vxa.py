@@ -7,9 +7,11 @@ whose Data has one CDATA Layer per z, each X*Y material indices, x fastest then 
 softevo's springs and Voxelyze's beams are different models, so the mapping is first-order and
 docs/export.md says where it is exact and where it is not:
 
-* Elastic_Mod = k / edge_length: a Voxelyze bond between two voxels of size L and modulus E has
-  axial stiffness E L^2 / L = E L, set equal to one softevo spring of stiffness k. softevo's
-  face and body diagonals make its solid stiffer than that, so E is an under-estimate.
+* Elastic_Mod = (144/19) k / edge_length and Poissons_Ratio = 5/19: the small-strain Young's
+  modulus and Poisson ratio, along a lattice axis, of a solid of softevo voxels whose springs
+  have stiffness k (each voxel's 28 springs: C11 = 28/3 k/L, C12 = C44 = 10/3 k/L; derived in
+  docs/export.md, checked against the lattice in tests/core/test_export.py). A lone Voxelyze bond
+  E L matched to one spring would give E = k / L, 7.6 times softer than softevo's solid.
 * Density = the robot's mass (softevo's point masses) over its voxels' volume: total mass kept.
 * actuation: softevo's rest length L(1 + A sin(w t + c)) with A = amplitude_scale * b (negated
   for neg_sine) becomes Voxelyze's thermal expansion 1 + CTE * TempAmp * sin(2 pi (t /
@@ -39,8 +41,11 @@ MATERIAL_NAMES = {
     "sine": "Active_+",
     "neg_sine": "Active_-",
 }
-#: Voxelyze's Poisson ratio: an isotropic central-force spring network has 0.25 (Cauchy).
-POISSONS_RATIO = 0.25
+#: Elastic constants of a solid of softevo voxels, in units of k / edge_length (docs/export.md).
+C11, C12 = 28 / 3, 10 / 3
+#: Its Young's modulus along a lattice axis (144/19 k/L) and Poisson ratio (5/19) from them.
+YOUNGS_PER_SPRING = (C11 - C12) * (C11 + 2 * C12) / (C11 + C12)
+POISSONS_RATIO = C12 / (C11 + C12)
 
 
 def _number(value: float) -> str:
@@ -79,8 +84,9 @@ class _Xml:
 
 
 def elastic_modulus(stiffness: float, edge_length: float) -> float:
-    """Voxelyze's Elastic_Mod (Pa) whose bond is as stiff as one softevo spring (N/m)."""
-    return stiffness / edge_length
+    """Voxelyze's Elastic_Mod (Pa): the Young's modulus of a solid of softevo voxels whose
+    springs all have `stiffness` (N/m), so a block stretches alike in both simulators."""
+    return YOUNGS_PER_SPRING * stiffness / edge_length
 
 
 def material_table(robot: VoxelRobot, n_masses: int, n_voxels: int) -> dict[str, dict[str, float]]:

@@ -89,8 +89,9 @@ def _add_export(commands: Any) -> None:
         help="write a robot file as a Voxelyze .vxa, a glTF .glb or an STL mesh",
         description=(
             "Write ROBOT.json (format softevo.robot/1) for other tools (docs/export.md): vxa is "
-            "the XML of Voxelyze, VoxCAD and voxcraft-sim (materials with Elastic_Mod = "
-            "stiffness / edge_length, actuation as thermal expansion with TempPeriod = 2 pi / "
+            "the XML of Voxelyze, VoxCAD and voxcraft-sim (materials with the Young's modulus "
+            "of a solid of softevo voxels, Elastic_Mod = 7.58 x stiffness / edge_length, "
+            "actuation as thermal expansion with TempPeriod = 2 pi / "
             "omega; voxel robots only); glb (glTF 2.0 binary, coloured by material, +Y up) and "
             "stl are the voxel surface in metres. Exits 1 if the file is invalid or cannot be "
             "written in that format."

@@ -25,7 +25,7 @@ from softevo.core.export import (
     voxel_grid,
 )
 from softevo.core.lattice import build_lattice
-from softevo.core.robot import Actuation, VoxelRobot
+from softevo.core.robot import Actuation, VoxelRobot, build_mechanics
 from softevo.core.robot_file import load_robot
 from softevo.core.settings import sim_settings
 
@@ -89,9 +89,10 @@ def test_vxa_maps_stiffness_mass_actuation_and_friction() -> None:
     sim = robot.sim
     root = parse_vxa(robot)
     assert float(root.findtext("./VXC/Lattice/Lattice_Dim")) == 0.5
-    assert mechanical(root, "Passive_Soft", "Elastic_Mod") == pytest.approx(600.0 / 0.5)
-    assert mechanical(root, "Passive_Hard", "Elastic_Mod") == pytest.approx(2000.0 / 0.5)
-    assert mechanical(root, "Active_+", "Elastic_Mod") == pytest.approx(2000.0 / 0.5)
+    assert mechanical(root, "Passive_Soft", "Elastic_Mod") == pytest.approx(144 / 19 * 600 / 0.5)
+    assert mechanical(root, "Passive_Hard", "Elastic_Mod") == pytest.approx(144 / 19 * 2000 / 0.5)
+    assert mechanical(root, "Active_+", "Elastic_Mod") == pytest.approx(144 / 19 * 2000 / 0.5)
+    assert mechanical(root, "Active_+", "Poissons_Ratio") == pytest.approx(5 / 19)
     thermal = root.find("./Environment/Thermal")
     assert float(thermal.findtext("TempPeriod")) == pytest.approx(2 * math.pi / 4.0)
     assert float(thermal.findtext("TempAmp")) == float(thermal.findtext("TempAmplitude")) == 1.0
@@ -117,6 +118,30 @@ def test_vxa_maps_stiffness_mass_actuation_and_friction() -> None:
     assert float(gravity.findtext("GravAcc")) == -9.81
     stop = root.find("./Simulator/StopCondition")
     assert float(stop.findtext("StopConditionValue")) == sim.duration
+
+
+def test_elastic_mod_is_the_young_modulus_of_softevos_solid() -> None:
+    """Stretch a block of soft voxels uniformly, in the robot's own lattice and springs: its
+    energy gives C11 and C12, hence Young's modulus and Poisson ratio, which the vxa writes."""
+    robot = VoxelRobot((3, 2, 2), ("soft",) * 12, sim=sim_settings(SIM))
+    mechanics = build_mechanics(robot)
+    rest, (first, second) = mechanics.positions, mechanics.lattice.springs.T
+    length = np.linalg.norm(rest[first] - rest[second], axis=1)
+
+    def energy_density(strain: np.ndarray) -> float:
+        moved = rest @ (np.eye(3) + strain).T
+        stretch = np.linalg.norm(moved[first] - moved[second], axis=1) - length
+        return 0.5 * float(np.sum(mechanics.stiffness * stretch**2)) / (12 * 0.5**3)
+
+    small = 1e-6
+    c11 = 2 * energy_density(np.diag([small, 0, 0])) / small**2
+    c12 = (2 * energy_density(np.diag([small, small, 0])) / small**2 - 2 * c11) / 2
+    young = (c11 - c12) * (c11 + 2 * c12) / (c11 + c12)
+    root = parse_vxa(robot)
+    assert mechanical(root, "Passive_Soft", "Elastic_Mod") == pytest.approx(young, rel=1e-4)
+    assert mechanical(root, "Passive_Soft", "Poissons_Ratio") == pytest.approx(
+        c12 / (c11 + c12), rel=1e-4
+    )
 
 
 def test_vxa_without_actuation_turns_the_temperature_off() -> None:
