@@ -27,7 +27,6 @@ from xml.sax.saxutils import escape
 
 import numpy as np
 
-from softevo import __version__
 from softevo.core.export import COLOURS, ExportError
 from softevo.core.robot import ACTUATED_LABELS, Robot, VoxelRobot
 from softevo.core.settings import SimSettings
@@ -227,7 +226,7 @@ def to_vxa(robot: Robot, grid: np.ndarray) -> bytes:
     xml = _Xml()
     xml.open("VXA", Version="1.1")
     xml.comment(
-        f"written by softevo {__version__} from a softevo.robot/1 file; the mapping of its "
+        "written by softevo from a softevo.robot/1 file; the mapping of its "
         "springs to Voxelyze materials is first-order (softevo docs/export.md)"
     )
     if robot.actuation.a != 0:
