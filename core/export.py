@@ -10,7 +10,6 @@ cell or the outside are written, so interior walls never reach a slicer or a vie
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 from typing import Any
 
@@ -120,6 +119,14 @@ def to_stl(robot: Robot) -> bytes:
     return bytes(mesh.export(file_type="stl"))
 
 
+def linear_rgb(colour: tuple[int, int, int]) -> list[float]:
+    """An sRGB colour (0..255) as glTF's linear baseColorFactor (0..1), so a viewer shows it
+    as the dashboard does."""
+    channels = np.asarray(colour, dtype=np.float64) / 255
+    linear = np.where(channels <= 0.04045, channels / 12.92, ((channels + 0.055) / 1.055) ** 2.4)
+    return [float(c) for c in linear]
+
+
 def to_glb(robot: Robot) -> bytes:
     """The voxel surface as glTF 2.0 binary: one mesh (and PBR material) per voxel material,
     named by the label, in metres with glTF's +Y up."""
@@ -129,18 +136,16 @@ def to_glb(robot: Robot) -> bytes:
 
     scene = trimesh.Scene()
     for label, mesh in surface_meshes(robot).items():
-        red, green, blue = COLOURS[label]
         material = PBRMaterial(
             name=label,
-            baseColorFactor=[red, green, blue, 255],
+            baseColorFactor=[*linear_rgb(COLOURS[label]), 1.0],
             metallicFactor=0.0,
             roughnessFactor=0.8,
         )
         mesh.vertices = mesh.vertices @ Z_UP_TO_Y_UP.T
         mesh.visual = TextureVisuals(material=material)
         scene.add_geometry(mesh, node_name=label, geom_name=label)
-    buffer = io.BytesIO(scene.export(file_type="glb"))
-    return buffer.getvalue()
+    return bytes(scene.export(file_type="glb"))
 
 
 def export_robot(robot: Robot, format: str) -> bytes:

@@ -21,6 +21,7 @@ from softevo.core.export import (
     ExportError,
     export_robot,
     format_from_path,
+    linear_rgb,
     surface_faces,
     voxel_grid,
 )
@@ -225,9 +226,10 @@ def test_glb_meshes_per_material_volume_box_and_colours() -> None:
     robot = mixed_robot()
     scene = load_glb(robot)
     assert sorted(scene.geometry) == ["hard", "neg_sine", "sine", "soft"]
-    for label, mesh in scene.geometry.items():
-        colour = mesh.visual.material.baseColorFactor
-        assert tuple(colour[:3]) == COLOURS[label]
+    for label, mesh in scene.geometry.items():  # glTF colours are linear: sRGB decoded
+        colour = np.asarray(mesh.visual.material.baseColorFactor[:3]) / 255
+        np.testing.assert_allclose(colour, linear_rgb(COLOURS[label]), atol=1 / 255)
+    assert linear_rgb((255, 0, 188)) == pytest.approx([1.0, 0.0, 0.503], abs=1e-3)
     whole = scene.to_mesh()
     whole.merge_vertices(merge_tex=True, merge_norm=True)  # one vertex per corner
     count, box = expected_box(robot)
