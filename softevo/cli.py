@@ -13,9 +13,10 @@ import math
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import NoReturn
+from typing import Any, NoReturn
 
 from softevo import __version__, plot_command, reproduce, run_command, service_commands
+from softevo.core.export import FORMATS
 
 
 class CommandError(Exception):
@@ -55,6 +56,54 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             raise CommandError(f"{args.trajectory}: cannot write ({error.strerror})") from None
     print(json.dumps(result.to_json(), indent=2))
     return 0 if result.stable else 1
+
+
+def _cmd_export(args: argparse.Namespace) -> int:
+    from softevo.core.export import ExportError, export_robot, format_from_path
+    from softevo.core.robot_file import RobotFileError, load_robot
+
+    format = args.format or format_from_path(args.out)
+    if format is None:
+        args.parser.error(
+            f"--format is needed: the suffix of {args.out!r} names no format ({', '.join(FORMATS)})"
+        )
+    try:
+        robot = load_robot(args.robot)
+    except RobotFileError as error:
+        raise CommandError(f"{args.robot}: {error}") from None
+    try:
+        data = export_robot(robot, format)
+    except ExportError as error:
+        raise CommandError(f"{args.robot}: {error}") from None
+    try:
+        Path(args.out).write_bytes(data)
+    except OSError as error:
+        raise CommandError(f"{args.out}: cannot write ({error.strerror})") from None
+    print(f"{args.out}: {format}, {len(data)} bytes", file=sys.stderr)
+    return 0
+
+
+def _add_export(commands: Any) -> None:
+    export = commands.add_parser(
+        "export",
+        help="write a robot file as a Voxelyze .vxa, a glTF .glb or an STL mesh",
+        description=(
+            "Write ROBOT.json (format softevo.robot/1) for other tools (docs/export.md): vxa is "
+            "the XML of Voxelyze, VoxCAD and voxcraft-sim (materials with the Young's modulus "
+            "of a solid of softevo voxels, Elastic_Mod = 7.58 x stiffness / edge_length, "
+            "actuation as thermal expansion with TempPeriod = 2 pi / "
+            "omega; voxel robots only); glb (glTF 2.0 binary, coloured by material, +Y up) and "
+            "stl are the voxel surface in metres. Exits 1 if the file is invalid or cannot be "
+            "written in that format."
+        ),
+    )
+    export.add_argument("robot", metavar="ROBOT.json", help="robot file")
+    export.add_argument(
+        "--format", choices=FORMATS,
+        help="file format (default: from the suffix of --out)",
+    )  # fmt: skip
+    export.add_argument("--out", required=True, metavar="FILE", help="file to write")
+    export.set_defaults(handler=_cmd_export)
 
 
 class Parser(argparse.ArgumentParser):
@@ -102,6 +151,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--fps", type=_positive_float, default=30.0, help="trajectory frames per second (30)"
     )
     simulate.set_defaults(handler=_cmd_simulate)
+    _add_export(commands)
     for subparser in commands.choices.values():
         subparser.set_defaults(parser=subparser)
     return parser

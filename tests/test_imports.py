@@ -21,6 +21,7 @@ print(json.dumps(loaded))
 COMMANDS = [
     ["--help"],
     *([name, "--help"] for name in ("run", "simulate", "serve", "worker", "reproduce", "plot")),
+    ["export", "--help"],
     ["db", "upgrade", "--help"],
     ["--version"],
 ]

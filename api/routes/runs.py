@@ -14,6 +14,7 @@ from softevo.api import store
 from softevo.api.db import Database
 from softevo.api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TokenDep
 from softevo.api.events import event_stream
+from softevo.api.export import FILE_CONTENT, FormatQuery, file_response
 from softevo.api.replay import replay_response
 from softevo.api.routes.meta import idle_workers
 from softevo.api.schemas import (
@@ -198,17 +199,24 @@ def list_individuals(
     )
 
 
-@router.get("/{run_id}/individuals/{number}", responses=NOT_FOUND)
+@router.get(
+    "/{run_id}/individuals/{number}",
+    response_model=IndividualDetail,
+    responses={**NOT_FOUND, **FILE_CONTENT},
+)
 def get_individual(
     run_id: RunId,
     number: Annotated[int, Path(ge=0, le=2**31 - 1, description="generation * P + index")],
     db: DatabaseDep,
-) -> IndividualDetail:
-    """One individual with its genome and robot file."""
+    format: FormatQuery = None,
+) -> Any:
+    """One individual with its genome and robot file; with `format`, its robot as that file."""
     run = store.get_run(db, run_id)
     data = store.get_individual(db, run, number)
     config = RunConfig.model_validate(run.config)
     robot = config.make_encoding().to_robot(Genome.from_json(data["genome"]), config.sim)
+    if format is not None:
+        return file_response(robot, format, f"run-{run_id}-individual-{number}")
     return IndividualDetail(**data, robot=robot_to_json(robot))
 
 
@@ -221,10 +229,15 @@ def _best_robot(db: Database, run_id: int) -> Any:
     return config.make_encoding().to_robot(Genome.from_json(best["genome"]), config.sim), best
 
 
-@router.get("/{run_id}/best", responses=NOT_FOUND)
-def get_best(run_id: RunId, db: DatabaseDep) -> dict[str, Any]:
-    """The fastest robot so far as a robot file (softevo.robot/1)."""
+@router.get(
+    "/{run_id}/best", response_model=dict[str, Any], responses={**NOT_FOUND, **FILE_CONTENT}
+)
+def get_best(run_id: RunId, db: DatabaseDep, format: FormatQuery = None) -> Any:
+    """The fastest robot so far as a robot file (softevo.robot/1); with `format`, as that file
+    (vxa, glb or stl: docs/export.md)."""
     robot, _best = _best_robot(db, run_id)
+    if format is not None:
+        return file_response(robot, format, f"run-{run_id}-best")
     return robot_to_json(robot)
 
 
