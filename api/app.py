@@ -120,6 +120,8 @@ def create_app(
         summary="Evolve modular soft crawling robots",
         version="0.1.0",
         lifespan=lifespan,
+        docs_url=None,  # served from the package by `dashboard.install` (offline)
+        redoc_url=None,  # ReDoc loads its script from a CDN
     )
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.limits.max_body_bytes)
     app.include_router(runs.router)
