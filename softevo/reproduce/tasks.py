@@ -59,10 +59,10 @@ def run_suite(client: Client, quick: bool) -> list[dict[str, Any]]:
         population = runs[0]["config"]["population"]
         budget = statistics.fmean(r["progress"]["evaluations"] for r in runs)
         random_ids[task] = [
-            client.run(
-                **base, preset=task, seed=run["seed"], algorithm="random",
-                population=population, generations=max(1, round(budget / population)),
-            ).id
+            client.run(**{
+                **base, "preset": task, "seed": run["seed"], "algorithm": "random",
+                "population": population, "generations": max(1, round(budget / population)),
+            }).id
             for run in runs
         ]  # fmt: skip
     random = {task: _wait(client, ids) for task, ids in random_ids.items()}
