@@ -120,6 +120,8 @@ def create_app(
         summary="Evolve modular soft crawling robots",
         version="0.1.0",
         lifespan=lifespan,
+        docs_url=None,  # served from the package by `dashboard.install` (offline)
+        redoc_url=None,  # ReDoc loads its script from a CDN
     )
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.limits.max_body_bytes)
     app.include_router(runs.router)
@@ -156,12 +158,12 @@ def _install_error_handlers(app: FastAPI) -> None:
         return JSONResponse({"detail": [error.to_json()]}, status_code=422)
 
     @app.exception_handler(RequestValidationError)
-    async def invalid(_request: Request, error: RequestValidationError) -> JSONResponse:
+    async def invalid(request: Request, error: RequestValidationError) -> JSONResponse:
         detail = [
             {"loc": list(e.get("loc", ())), "msg": str(e.get("msg", "")), "type": e.get("type")}
             for e in error.errors()
         ]
-        return JSONResponse({"detail": detail}, status_code=422)
+        return JSONResponse({"detail": not_json(request, detail) or detail}, status_code=422)
 
     @app.exception_handler(OperationalError)
     @app.exception_handler(InterfaceError)
@@ -180,6 +182,20 @@ def _install_error_handlers(app: FastAPI) -> None:
     async def internal(_request: Request, error: Exception) -> JSONResponse:
         log.exception("unhandled error")
         return JSONResponse({"detail": "internal server error"}, status_code=500)
+
+
+def not_json(request: Request, detail: list[dict[str, Any]]) -> list[dict[str, Any]] | None:
+    """A body refused whole that was not sent as JSON (a form, text, no Content-Type): say what
+    to send instead of pydantic's "a valid dictionary" (a client forgot the header), or None."""
+    given = request.headers.get("content-type", "")
+    media = given.split(";")[0].strip().lower()
+    if media == "application/json" or media.endswith("+json"):
+        return None
+    if not any(d["loc"] == ["body"] for d in detail):
+        return None
+    got = f"Content-Type {given!r}" if given else "no Content-Type"
+    message = f"the body must be a JSON object sent with Content-Type: application/json ({got})"
+    return [{"loc": ["body"], "msg": message, "type": "content_type"}]
 
 
 def _allowed_methods(app: FastAPI, path: str) -> list[str]:

@@ -80,7 +80,7 @@ def test_the_stack_is_api_workers_redis_postgres_and_the_simulate_tool() -> None
 @pytest.mark.parametrize("name", sorted(softevo_services(load_compose())))
 def test_services_run_existing_softevo_commands(name: str) -> None:
     service = load_compose()["services"][name]
-    assert service.get("image") == SOFTEVO_IMAGE and service.get("build") == "."
+    assert service.get("image") == SOFTEVO_IMAGE
     argv = [*service.get("entrypoint", []), *service.get("command", [])]
     assert argv[0] == "softevo", f"{name} does not run softevo: {argv}"
     with pytest.raises(SystemExit) as exited:  # `softevo COMMAND --help` exits 0 if it exists
@@ -89,6 +89,17 @@ def test_services_run_existing_softevo_commands(name: str) -> None:
     for arg in argv[2:]:
         if arg.endswith(".json"):
             assert (ROOT / arg).is_file(), f"{name} refers to missing file {arg}"
+
+
+def test_one_image_is_built_and_the_other_services_run_it() -> None:
+    """`docker compose build` builds once: only the api has `build`; the worker and simulate
+    run the image it tags and never try to pull it from a registry (it is not on one)."""
+    services = softevo_services(load_compose())
+    builders = {name for name, service in services.items() if "build" in service}
+    assert builders == {"api"} and services["api"]["build"] == "."
+    for name in set(services) - builders:
+        assert services[name]["image"] == services["api"]["image"] == SOFTEVO_IMAGE
+        assert services[name]["pull_policy"] == "never", name
 
 
 def test_volumes_are_declared_and_image_builds_from_dockerfile() -> None:

@@ -24,10 +24,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-import httpx
-
+from softevo.client import APIError, UnreachableError
 from softevo.reproduce.champions import breathing_cube, champions, champions_table
-from softevo.reproduce.client import checked, service
+from softevo.reproduce.client import service
 from softevo.reproduce.experiments import Experiments, wall_seconds
 from softevo.reproduce.figures import write_figures
 from softevo.reproduce.plan import FULL, QUICK
@@ -92,10 +91,12 @@ def reproduce_command(args: argparse.Namespace) -> int:
             experiments.submit_all()
             experiments.wait()
             figure4 = write_figures(experiments, out)
-            sweep = checked(client.get(f"/sweeps/{experiments.sweep_id}"))
+            sweep = client.get_sweep(experiments.sweep_id).status()
             rows = experiments.rows()
             longer = champions(experiments, out)
-    except httpx.HTTPError as error:
+    except APIError as error:
+        raise SystemExit(f"softevo reproduce: {error}") from None
+    except UnreachableError as error:
         where = args.url or "the private service"
         raise SystemExit(f"softevo reproduce: error: {where}: {error}") from None
     wall = time.monotonic() - started
@@ -114,7 +115,9 @@ def _task_suite(args: argparse.Namespace, out: Path, started: float) -> int:
     try:
         with service(args.url, out, args.workers, args.resume) as client:
             rows = run_suite(client, args.quick)
-    except httpx.HTTPError as error:
+    except APIError as error:
+        raise SystemExit(f"softevo reproduce: {error}") from None
+    except UnreachableError as error:
         where = args.url or "the private service"
         raise SystemExit(f"softevo reproduce: error: {where}: {error}") from None
     wall = time.monotonic() - started

@@ -9,7 +9,6 @@ from pathlib import Path
 from typing import Any
 
 from softevo.core import figures
-from softevo.reproduce.client import checked
 from softevo.reproduce.experiments import Experiments
 from softevo.reproduce.plan import CLOCK
 from softevo.reproduce.tables import fmt
@@ -72,7 +71,7 @@ def champions(experiments: Experiments, out: Path) -> list[dict[str, Any]]:
             if not done:
                 continue
             run = max(done, key=lambda r: r["progress"]["best_fitness"])
-            data = checked(experiments.client.get(f"/runs/{run['id']}/best"))
+            data = experiments.client.get_run(run["id"]).best()
             box = "x".join(map(str, shape))
             (out / f"{prefix}_{box}.json").write_text(json.dumps(data, indent=1) + "\n")
             robot = parse_robot(data)

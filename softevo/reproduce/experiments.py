@@ -12,11 +12,9 @@ from dataclasses import dataclass, field
 from datetime import datetime
 from typing import Any
 
-import httpx
-
+from softevo.client import Client
 from softevo.core.config import resolve
 from softevo.core.status import RunStatus
-from softevo.reproduce.client import checked
 from softevo.reproduce.plan import CLOCK, FINAL, GA_ON_FOCUS, REFERENCES, Plan
 
 # -- the experiments -------------------------------------------------------------------------------
@@ -74,7 +72,7 @@ def _key(config: dict[str, Any]) -> str:
 class Experiments:
     """Submits every group, waits for them, and keeps what the API says of each run."""
 
-    def __init__(self, client: httpx.Client, plan: Plan, resume: bool = False) -> None:
+    def __init__(self, client: Client, plan: Plan, resume: bool = False) -> None:
         self.client = client
         self.plan = plan
         self.groups: list[Group] = []
@@ -92,13 +90,7 @@ class Experiments:
 
     def _all_runs(self) -> Iterator[dict[str, Any]]:
         """Every run the service holds, newest first, 200 to a request."""
-        offset = 0
-        while True:
-            page = checked(self.client.get("/runs", params={"offset": offset, "limit": 200}))
-            yield from page["items"]
-            offset += len(page["items"])
-            if not page["items"] or offset >= page["total"]:
-                return
+        return self.client.runs(page=200)
 
     def _index_existing(self) -> None:
         """What the service already holds that a resumed reproduction may reuse: every run
@@ -113,7 +105,7 @@ class Experiments:
                 self._runs.setdefault(_key(run["config"]), []).append(run["id"])
         for ids in self._runs.values():
             ids.sort()
-        self._sweeps = [checked(self.client.get(f"/sweeps/{i}")) for i in sorted(sweep_ids)]
+        self._sweeps = [self.client.get_sweep(i).status() for i in sorted(sweep_ids)]
 
     def submit_run(self, group: Group, request: dict[str, Any]) -> None:
         reusable = self._runs.get(_key(resolve(request).model_dump(mode="json")))
@@ -121,8 +113,7 @@ class Experiments:
             group.run_ids.append(reusable.pop(0))
             self.reused += 1
             return
-        run = checked(self.client.post("/runs", json=request))
-        group.run_ids.append(run["id"])
+        group.run_ids.append(self.client.run(**request).id)
 
     def submit_sweep(self, request: dict[str, Any]) -> dict[str, Any]:
         for sweep in self._sweeps:
@@ -133,7 +124,7 @@ class Experiments:
                 self._sweeps.remove(sweep)
                 self.reused += len(statuses)
                 return sweep
-        return checked(self.client.post("/sweeps", json=request))
+        return self.client.sweep(**request).data
 
     def sweep_groups(self, name: tuple[str, str], request: dict[str, Any]) -> int:
         """The plan's boxes and seeds as one sweep of `request`, a group per box; its id."""
@@ -165,7 +156,7 @@ class Experiments:
             self.groups.append(spring)
         focus = Group(*GA_ON_FOCUS, plan.focus)
         swept = {
-            checked(self.client.get(f"/runs/{i}"))["seed"]: i
+            self.client.get_run(i).status()["seed"]: i
             for i in self.group("boxes", "paper-voxel", plan.focus).run_ids
         }
         for seed in plan.focus_seeds:
@@ -229,7 +220,7 @@ class Experiments:
             if not wanted:
                 break
         for run_id in wanted:  # not listed (yet): ask for it alone
-            self._latest[run_id] = checked(self.client.get(f"/runs/{run_id}"))
+            self._latest[run_id] = self.client.get_run(run_id).status()
         for run_id, run in self._latest.items():
             if run["status"] in FINAL:
                 self._finished.add(run_id)
@@ -266,7 +257,7 @@ class Experiments:
 
     def curve(self, run_id: int) -> list[dict[str, Any]]:
         if run_id not in self._curves:
-            self._curves[run_id] = checked(self.client.get(f"/runs/{run_id}/curve"))["generations"]
+            self._curves[run_id] = self.client.get_run(run_id).curve()
         return self._curves[run_id]
 
     def budget(self, group: Group) -> float | None:
@@ -332,13 +323,4 @@ class Experiments:
         return total
 
     def individuals(self, run_id: int) -> list[dict[str, Any]]:
-        items: list[dict[str, Any]] = []
-        while True:
-            page = checked(
-                self.client.get(
-                    f"/runs/{run_id}/individuals", params={"offset": len(items), "limit": 5000}
-                )
-            )
-            items += page["items"]
-            if not page["items"] or len(items) >= page["total"]:
-                return items
+        return self.client.get_run(run_id).individuals()

@@ -14,11 +14,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-import httpx
-
+from softevo.client import Client
 from softevo.core.objectives import OBJECTIVES, objective_label
 from softevo.core.tasks import TASKS
-from softevo.reproduce.client import checked
 from softevo.reproduce.plan import FINAL
 from softevo.reproduce.tables import fmt
 
@@ -34,10 +32,10 @@ COLUMNS = [
 ]  # fmt: skip
 
 
-def _wait(client: httpx.Client, run_ids: list[int]) -> list[dict[str, Any]]:
+def _wait(client: Client, run_ids: list[int]) -> list[dict[str, Any]]:
     last = ""
     while True:
-        runs = [checked(client.get(f"/runs/{i}")) for i in run_ids]
+        runs = [client.get_run(i).status() for i in run_ids]
         done = sum(r["status"] in FINAL for r in runs)
         if f"{done}" != last:
             print(f"  tasks: {done}/{len(runs)} runs done", flush=True)
@@ -47,10 +45,10 @@ def _wait(client: httpx.Client, run_ids: list[int]) -> list[dict[str, Any]]:
         time.sleep(2)
 
 
-def run_suite(client: httpx.Client, quick: bool) -> list[dict[str, Any]]:
+def run_suite(client: Client, quick: bool) -> list[dict[str, Any]]:
     """Every task's GA runs and random-search runs, finished: one row per task."""
     suite = QUICK_SUITE if quick else FULL_SUITE
-    sweep = checked(client.post("/sweeps", json={**suite, "tasks": list(TASKS)}))
+    sweep = client.sweep(**suite, tasks=list(TASKS)).data
     groups = {group["task"]: group["run_ids"] for group in sweep["boxes"]}
     ga = {task: _wait(client, ids) for task, ids in groups.items()}
     base = {key: value for key, value in suite.items() if key not in ("seeds", "shapes")}
@@ -61,10 +59,10 @@ def run_suite(client: httpx.Client, quick: bool) -> list[dict[str, Any]]:
         population = runs[0]["config"]["population"]
         budget = statistics.fmean(r["progress"]["evaluations"] for r in runs)
         random_ids[task] = [
-            checked(client.post("/runs", json={
+            client.run(**{
                 **base, "preset": task, "seed": run["seed"], "algorithm": "random",
                 "population": population, "generations": max(1, round(budget / population)),
-            }))["id"]
+            }).id
             for run in runs
         ]  # fmt: skip
     random = {task: _wait(client, ids) for task, ids in random_ids.items()}

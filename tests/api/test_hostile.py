@@ -81,6 +81,32 @@ def test_malformed_bodies_get_a_clear_error_and_queue_nothing(
 
 
 @pytest.mark.parametrize(
+    ("headers", "got"),
+    [
+        ({}, "no Content-Type"),
+        ({"content-type": "text/plain"}, "'text/plain'"),
+        (
+            {"content-type": "application/x-www-form-urlencoded"},
+            "'application/x-www-form-urlencoded'",
+        ),
+    ],
+)
+@pytest.mark.parametrize("path", ["/runs", "/sweeps"])
+def test_a_body_not_sent_as_json_names_the_content_type_to_send(
+    client: TestClient, headers: dict[str, str], got: str, path: str
+) -> None:
+    """A client that forgot the header hears what to send, not pydantic's "a valid dictionary"."""
+    response = client.post(path, content=b'{"preset": "quick"}', headers=headers)
+    assert response.status_code == 422, response.text
+    (error,) = response.json()["detail"]
+    assert error["loc"] == ["body"] and error["type"] == "content_type"
+    assert "Content-Type: application/json" in error["msg"] and got in error["msg"]
+    assert run_count(client) == 0
+    sent = client.post(path, content=b'{"preset": "quick"}', headers=JSON)  # the same, declared
+    assert sent.status_code == 201, sent.text
+
+
+@pytest.mark.parametrize(
     ("override", "field"),
     [
         ({"shape": [100, 100, 100]}, "shape"),

@@ -281,6 +281,19 @@ def test_static_files_are_local_and_typed(server: httpx.Client) -> None:
     assert "/" not in server.get("/openapi.json").json()["paths"]
 
 
+def test_the_api_docs_render_offline(page: Any, server: httpx.Client) -> None:
+    """/docs is Swagger UI from the package: it draws every endpoint with nothing fetched from
+    outside (the page fixture aborts and reports any request off this machine)."""
+    page.goto(f"{page.base}/docs")
+    page.wait_for_selector(".swagger-ui .opblock", timeout=30000)
+    assert "softevo" in page.inner_text(".swagger-ui .info .title")
+    shown = set(
+        page.eval_on_selector_all(".opblock-summary-path", "ps => ps.map(p => p.dataset.path)")
+    )
+    assert set(server.get("/openapi.json").json()["paths"]) <= shown
+    shot(page, "api-docs")
+
+
 def test_the_token_is_asked_for_and_kept(page: Any, tmp_path: Path) -> None:
     """With SOFTEVO_API_TOKEN set, a start without it is refused and the token field is pointed
     at; once typed, the token is kept in localStorage and the run starts."""
