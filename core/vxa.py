@@ -220,6 +220,11 @@ def to_vxa(robot: Robot, grid: np.ndarray) -> bytes:
             "vxa needs a robot of voxel materials (soft, hard, sine, neg_sine): this robot's "
             "springs carry their own materials, which Voxelyze cannot express (use glb or stl)"
         )
+    if robot.phases is not None:
+        raise ExportError(
+            "vxa: this robot's voxels each have their own phase and amplitude (voxel-phase), "
+            "which Voxelyze's per-material actuation cannot express (use glb or stl)"
+        )
     filled = grid != "empty"
     table = material_table(robot, _corner_count(filled), int(filled.sum()))
     sim = robot.sim

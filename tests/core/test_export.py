@@ -165,6 +165,16 @@ def test_vxa_refuses_robots_whose_springs_carry_the_materials(examples: Path) ->
         export_robot(robot, "vxa")
 
 
+def test_vxa_refuses_a_co_designed_robot_but_glb_and_stl_export_it() -> None:
+    labels = ("sine", "hard", "neg_sine", "soft")
+    robot = VoxelRobot((4, 1, 1), labels, Actuation(0.1, 0.5, 0.0), sim_settings({}),
+                       (0.0, 0.0, 1.0, 0.0), (0.5, 0.0, 0.5, 0.0))  # fmt: skip
+    with pytest.raises(ExportError, match="own phase and amplitude"):
+        export_robot(robot, "vxa")
+    for name in ("glb", "stl"):
+        assert len(export_robot(robot, name)) > 100
+
+
 def test_unknown_format_is_refused_naming_the_formats() -> None:
     with pytest.raises(ExportError, match="vxa, glb, stl"):
         export_robot(mixed_robot(), "obj")
