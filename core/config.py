@@ -150,6 +150,11 @@ PRESETS: dict[str, dict[str, Any]] = {
 }
 
 PRESETS.update(task_presets(_PAPER_VOXEL))
+#: Quality-diversity on the paper's phase 3: the same GA operators, parents from the archive.
+PRESETS["map-elites"] = {
+    **_PAPER_VOXEL, "algorithm": "map-elites", "descriptors": ["voxels", "actuated"],
+    "bins": [8, 8],
+}  # fmt: skip
 
 PRESET_DESCRIPTIONS = {
     "paper-cube": "paper phase 2: one cube, 28 springs pick one of 4 [k,b,w,c] options",
@@ -157,6 +162,8 @@ PRESET_DESCRIPTIONS = {
     "voxel-plus": "paper-voxel with half the children mutated: it keeps improving where "
     "paper-voxel stalls (docs/evolution.md)",
     "quick": "a small voxel run for demos and tests (3x3x3, 16 x 20 generations, 3 s)",
+    "map-elites": "paper-voxel as MAP-Elites: the best robot of every cell of filled x actuated "
+    "fraction (8 x 8), parents drawn from the archive (docs/evolution.md)",
     **{name: f"paper-voxel task: {asks}" for name, (asks, _, _) in TASKS.items()},
 }
 
