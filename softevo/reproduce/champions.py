@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import json
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -17,12 +18,17 @@ from softevo.reproduce.tables import fmt
 # -- phase 1 ---------------------------------------------------------------------------------------
 
 
+def shipped_robot_text(name: str) -> str:
+    """A robot file shipped inside the package (an installed softevo has no examples/ folder)."""
+    return resources.files("softevo.reproduce").joinpath("data", name).read_text(encoding="utf-8")
+
+
 def breathing_cube(out: Path, quick: bool) -> dict[str, Any]:
     """The paper's phase 1: the shipped breathing cube, simulated here (one robot, no evolution)."""
     from softevo.core.physics import simulate
-    from softevo.core.robot_file import load_robot, with_sim
+    from softevo.core.robot_file import parse_robot, with_sim
 
-    robot = load_robot(Path(__file__).resolve().parents[2] / "examples" / "breathing_cube.json")
+    robot = parse_robot(json.loads(shipped_robot_text("breathing_cube.json")))
     if quick:
         robot = with_sim(robot, duration=2.0)
     result, trajectory = simulate(robot, record_every=max(1, round(1 / (100 * robot.sim.dt))))
