@@ -146,18 +146,28 @@ def _past_the_paper(experiments: Experiments, out: Path) -> None:
 def _curves(
     experiments: Experiments, groups: list[tuple[str, Group]], title: str, path: Path, by: str
 ) -> None:
-    """Best so far of every run of each group, against generation or cumulative simulations:
-    one legend entry per run (group and seed); one group: a colour per seed, several: a colour
-    per group and a line style per seed."""
+    """Best so far of every run of each group, against generation or cumulative simulations."""
+    runs = [
+        [(run["seed"], experiments.curve(run["id"])) for run in group.runs] for _, group in groups
+    ]
+    labels = [label for label, _ in groups]
+    figures.save(curves_figure(list(zip(labels, runs, strict=True)), title, by), path)
+
+
+def curves_figure(
+    groups: list[tuple[str, list[tuple[int, list[dict[str, Any]]]]]], title: str, by: str
+) -> Any:
+    """Best so far per run, one legend entry per run (group and seed); one group: a colour per
+    seed, several: a colour per group and a line style per seed. `groups`: (label, [(seed,
+    curve rows)]); `by`: "generation" or "evaluations" (cumulative simulations)."""
     from matplotlib.ticker import MaxNLocator
 
     plt = figures.pyplot()
     figure, axes = plt.subplots(figsize=(7.0, 3.4))
     colours = ["tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown"]
     styles = ["-", "--", ":", "-."]
-    for k, (label, group) in enumerate(groups):
-        for n, run in enumerate(group.runs):
-            curve = experiments.curve(run["id"])
+    for k, (label, runs) in enumerate(groups):
+        for n, (seed, curve) in enumerate(runs):
             if by == "evaluations":
                 x, total = [], 0
                 for row in curve:
@@ -165,15 +175,14 @@ def _curves(
                     x.append(total)
             else:
                 x = [row["generation"] for row in curve]
-            y = [row["best_so_far"] for row in curve]
             axes.plot(
                 x,
-                y,
+                [row["best_so_far"] for row in curve],
                 color=colours[(n if len(groups) == 1 else k) % len(colours)],
                 linestyle="-" if len(groups) == 1 else styles[n % len(styles)],
                 alpha=0.8,
                 marker="." if len(x) < 20 else None,
-                label=f"{label}, seed {run['seed']}",
+                label=f"{label}, seed {seed}",
             )
     axes.set_xlabel("simulations" if by == "evaluations" else "generation")
     axes.xaxis.set_major_locator(MaxNLocator(integer=True))
@@ -181,4 +190,4 @@ def _curves(
     axes.set_title(title)
     axes.legend(frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7)
     figure.tight_layout()
-    figures.save(figure, path)
+    return figure
