@@ -176,7 +176,7 @@ def panel_figure(
 ) -> Figure:
     """All three, stacked, for one run: Figure 4(b)-(d) in one file."""
     plt = pyplot()
-    figure, axes = plt.subplots(3, 1, figsize=(7.0, 9.5), sharex=True)
+    figure, axes = plt.subplots(3, 1, figsize=(6.5, 9.5), sharex=True)
     suffix = f": {title}" if title else ""
     draw_curve(axes[0], curve, "learning curve" + suffix, ylabel)
     draw_population(axes[1], individuals, "population" + suffix, ylabel)
