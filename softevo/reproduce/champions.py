@@ -40,7 +40,7 @@ def breathing_cube(out: Path, quick: bool) -> dict[str, Any]:
     axes.plot(trajectory.times, heights, label="centre of mass height (m)")
     axes.plot(trajectory.times, xs - xs[0], label="centre of mass x shift (m)")
     axes.set_xlabel("time (s)")
-    axes.set_title("phase 1: the breathing cube dropped onto the ground")
+    axes.set_title("phase 1: the breathing cube (1x1x1, not evolved), dropped on flat ground")
     axes.legend(frameon=False)
     figure.tight_layout()
     figures.save(figure, out / "phase1_breathing_cube.png")
