@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import site
 import subprocess
 import sys
@@ -14,6 +15,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
+#: What pyproject.toml builds the wheel from.
+PACKAGED = ("pyproject.toml", "README.md", "softevo", "core", "api", "worker", "migrations")
 
 
 def _clean_env() -> dict[str, str]:
@@ -26,9 +29,18 @@ def installed(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A venv holding the built wheel; its dependencies come from this venv's site-packages
     through a .pth line (added after its own site-packages, so its softevo comes first)."""
     work = tmp_path_factory.mktemp("installed")
+    source = work / "source"  # a copy: building in the checkout would leave a build/ whose
+    # stale files (of modules since deleted) would go into later wheels
+    source.mkdir()
+    for name in PACKAGED:
+        if (ROOT / name).is_dir():
+            ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
+            shutil.copytree(ROOT / name, source / name, ignore=ignore)
+        else:
+            shutil.copy2(ROOT / name, source / name)
     subprocess.run(
         [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
-         "-w", str(work / "dist"), str(ROOT)],
+         "-w", str(work / "dist"), str(source)],
         check=True, capture_output=True, timeout=300,
     )  # fmt: skip
     (wheel,) = (work / "dist").glob("softevo-*.whl")
