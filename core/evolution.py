@@ -57,6 +57,23 @@ class Evolution:
             state=algorithm.start(config.seed),
         )
 
+    @classmethod
+    def resume(
+        cls, config: RunConfig, state: GAState, cache: dict[str, float], elapsed: float = 0.0
+    ) -> Evolution:
+        """A stopped run, going on from its state and fitness cache: the generations still to
+        run are those an uninterrupted run would have run (breeding depends on the seed and
+        the stored generation only), and with the cache so are their counts."""
+        if state.seed != config.seed:
+            raise ValueError(f"the state is of seed {state.seed}, the config of {config.seed}")
+        evolution = cls.start(config)
+        evolution.state = state
+        evolution.cache = dict(cache)
+        evolution.evaluations = sum(stats.evaluations for stats in state.history)
+        evolution.saved = sum(stats.saved for stats in state.history)
+        evolution.elapsed = elapsed
+        return evolution
+
     @property
     def algorithm(self) -> GeneticAlgorithm:
         return self.engine.algorithm

@@ -45,12 +45,17 @@ SPEED = "speed (m/s)"
 
 
 def run_title(config: dict[str, Any], run: str = "") -> str:
-    """`run 3 (4x4x4, seed 1, task-stairs: steps terrain)`: a run named with its task."""
+    """`run 3 (4x4x4, seed 1, speed on flat ground, preset quick)`: a run named with its box,
+    seed and task, so a figure says what it shows."""
     terrain = config.get("sim", {}).get("terrain", {}).get("kind", "flat")
     shape = config.get("shape")
-    parts = [f"{'x'.join(map(str, shape))}" if shape else "", f"seed {config.get('seed')}"]
-    if terrain != "flat" or config.get("objective", "speed") != "speed":
-        parts.append(f"{config.get('preset') or 'custom'}: {terrain} terrain")
+    objective = config.get("objective") or "speed"
+    parts = [
+        f"{'x'.join(map(str, shape))}" if shape else "",
+        f"seed {config.get('seed')}",
+        f"{objective} on {terrain} ground",
+        f"preset {config.get('preset') or 'custom'}",
+    ]
     inner = ", ".join(p for p in parts if p)
     return f"{run} ({inner})" if run else inner
 
@@ -71,22 +76,41 @@ def _generation_axis(axes: Any) -> None:
     axes.xaxis.set_major_locator(MaxNLocator(integer=True))
 
 
+#: What the diversity chart's number is (`softevo.core.ga.stats.diversity`), on the figure.
+DIVERSITY = "diversity (mean pairwise\nHamming distance)"
+DIVERSITY_CAPTION = (
+    "diversity: the fraction of discrete genes in which two individuals differ, averaged over "
+    "all pairs;\n0 = a population of clones, about 1 - 1/alphabet = uniformly random genomes"
+)
+
+
+def _outside_legend(axes: Any) -> None:
+    """The legend right of the data area, where it never covers a point."""
+    axes.legend(frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
+
+
 def draw_curve(axes: Any, rows: Sequence[Row], title: str, ylabel: str = SPEED) -> None:
     generations = [int(row["generation"]) for row in rows]
+    for key, style, colour in (
+        ("best", "-", "tab:blue"),
+        ("mean", "--", "tab:orange"),
+        ("median", ":", "tab:green"),
+    ):
+        axes.plot(generations, [_value(r, key) for r in rows], style, color=colour, label=key)
+    # drawn last, dashed and on top: where it equals `best` it is still seen
     axes.plot(
         generations,
         [_value(r, "best_so_far") for r in rows],
+        linestyle=(0, (4, 3)),
         color="black",
-        lw=2.6,
-        alpha=0.45,
+        lw=1.6,
+        zorder=5,
         label="best so far",
     )
-    for key, style in (("best", "-"), ("mean", "--"), ("median", ":")):
-        axes.plot(generations, [_value(r, key) for r in rows], style, label=key)
     _generation_axis(axes)
     axes.set_ylabel(ylabel)
     axes.set_title(title)
-    axes.legend(frameon=False)
+    _outside_legend(axes)
 
 
 def draw_population(axes: Any, individuals: Sequence[Row], title: str, ylabel: str = SPEED) -> None:
@@ -102,25 +126,29 @@ def draw_population(axes: Any, individuals: Sequence[Row], title: str, ylabel: s
             s=12,
             marker="x",
             color="tab:red",
-            label=f"failed ({len(failed)})",
+            label=f"failed ({len(failed)}), at 0",
         )
     _generation_axis(axes)
     axes.set_ylabel(ylabel)
     axes.set_title(title)
-    axes.legend(frameon=False, loc="lower right")
+    _outside_legend(axes)
 
 
 def draw_diversity(axes: Any, rows: Sequence[Row], title: str) -> None:
     axes.plot([int(r["generation"]) for r in rows], [_value(r, "diversity") for r in rows])
     _generation_axis(axes)
-    axes.set_ylabel("diversity")
+    axes.set_ylabel(DIVERSITY)
     axes.set_ylim(bottom=0)
     axes.set_title(title)
+    axes.annotate(
+        DIVERSITY_CAPTION, xy=(0, 0), xycoords="axes fraction", xytext=(0, -34),
+        textcoords="offset points", va="top", fontsize=7,
+    )  # fmt: skip
 
 
 def _single(draw: Any, data: Sequence[Row], title: str, height: float = 3.4, **how: Any) -> Figure:
     plt = pyplot()
-    figure, axes = plt.subplots(figsize=(5.5, height))
+    figure, axes = plt.subplots(figsize=(6.5, height))
     draw(axes, data, title, **how)
     figure.tight_layout()
     return figure
@@ -139,8 +167,8 @@ def population_figure(
 
 
 def diversity_figure(rows: Sequence[Row], title: str = "diversity") -> Figure:
-    """Figure 4(d): the population's genetic diversity per generation."""
-    return _single(draw_diversity, rows, title, height=3.0)
+    """Figure 4(d): the population's genetic diversity per generation (defined under it)."""
+    return _single(draw_diversity, rows, title, height=3.4)
 
 
 def panel_figure(
@@ -148,7 +176,7 @@ def panel_figure(
 ) -> Figure:
     """All three, stacked, for one run: Figure 4(b)-(d) in one file."""
     plt = pyplot()
-    figure, axes = plt.subplots(3, 1, figsize=(6.0, 9.0), sharex=True)
+    figure, axes = plt.subplots(3, 1, figsize=(6.5, 9.5), sharex=True)
     suffix = f": {title}" if title else ""
     draw_curve(axes[0], curve, "learning curve" + suffix, ylabel)
     draw_population(axes[1], individuals, "population" + suffix, ylabel)
@@ -159,16 +187,34 @@ def panel_figure(
     return figure
 
 
-def write(figure: Figure, target: BinaryIO | Path) -> None:
-    """Write a PNG and free the figure (many figures in one process would otherwise pile up)."""
+#: The file formats a figure is written in, by the file's suffix.
+FORMATS = {".png": "png", ".pdf": "pdf", ".svg": "svg"}
+
+
+def figure_format(path: Path) -> str:
+    """The format `path`'s suffix names; ValueError naming the allowed ones otherwise (a
+    .pdf that held PNG bytes would open nowhere)."""
+    try:
+        return FORMATS[path.suffix.lower()]
+    except KeyError:
+        allowed = ", ".join(FORMATS)
+        raise ValueError(
+            f"{path}: unknown figure format {path.suffix or '(no suffix)'!r}; use one of {allowed}"
+        ) from None
+
+
+def write(figure: Figure, target: BinaryIO | Path, format: str = "png") -> None:
+    """Write the figure and free it (many figures in one process would otherwise pile up)."""
     plt = pyplot()
-    figure.savefig(target, format="png")
+    figure.savefig(target, format=format)
     plt.close(figure)
 
 
 def save(figure: Figure, path: Path) -> Path:
+    """Write `figure` to `path` in the format of its suffix (.png, .pdf or .svg)."""
+    format = figure_format(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    write(figure, path)
+    write(figure, path, format)
     return path
 
 

@@ -295,6 +295,16 @@ def _spring_mechanics(robot: SpringRobot) -> Mechanics:
     )
 
 
+def dropped_voxels(robot: Robot, mechanics: Mechanics) -> int:
+    """Filled voxels left out of `mechanics` because they are not face-connected to the
+    largest group (only that group is built): worth telling whoever wrote the file."""
+    if isinstance(robot, VoxelRobot):
+        filled = sum(label != "empty" for label in robot.voxels)
+    else:
+        filled = sum(robot.filled)
+    return int(filled - np.count_nonzero(mechanics.lattice.kept))
+
+
 def build_mechanics(robot: Robot) -> Mechanics:
     """Turn a robot into the arrays the physics kernel runs on."""
     if isinstance(robot, VoxelRobot):

@@ -3,7 +3,8 @@
     {"format": "softevo.robot/1",
      "shape": [nx, ny, nz],
      "voxels": [label, ...],                 # nx*ny*nz labels, x fastest, then y, then z
-     "actuation": {"a": .., "b": .., "c": ..},   # genes of sine / neg_sine voxels
+     "actuation": {"a": .., "b": .., "c": ..},   # genes of sine / neg_sine voxels: required
+                                             # with any (0, 0, 0 would be a still robot)
      "sim": {"dt": .., ...},                 # overrides of the default SimSettings
      "objective": "speed"}                   # optional: the measure that is its fitness
 
@@ -140,6 +141,22 @@ def _per_voxel(
     return tuple(0.0 if value is None else float(value) for value in values)
 
 
+def _actuated_needs_genes(model: _RobotModel) -> None:
+    """sine / neg_sine labels without "actuation" are refused: the genes would silently be
+    a = b = c = 0 and the robot would not move. Files softevo writes always carry them."""
+    if model.actuation is not None or model.springs is not None:
+        return
+    field = "spring_labels" if model.spring_labels is not None else "voxels"
+    labels = model.spring_labels if model.spring_labels is not None else model.voxels or []
+    actuated = [label for label in labels if label in ("sine", "neg_sine")]
+    if actuated:
+        raise _refuse(
+            "actuation",
+            f"required: {field} has {len(actuated)} {actuated[0]} label(s); give "
+            '{"a": .., "b": .., "c": ..} (the genes of the actuated springs)',
+        )
+
+
 def file_objective(data: dict[str, Any]) -> str:
     """The objective a (parsed, so valid) robot file's fitness is measured by."""
     return data.get("objective") or "speed"
@@ -168,6 +185,7 @@ def parse_robot(data: Any) -> Robot:
     if model.springs is not None and model.spring_labels is not None:
         raise _refuse("spring_labels", "give either 'springs' or 'spring_labels', not both")
     shape = (model.shape[0], model.shape[1], model.shape[2])
+    _actuated_needs_genes(model)
     genes = model.actuation or _ActuationModel()
     actuation = Actuation(genes.a, genes.b, genes.c)
     robot: Robot

@@ -31,6 +31,8 @@ def main() -> None:
         sim=sim_settings({"drop_height": 1.0, "omega": 2 * math.pi, "duration": 5.0}),
     )
     dump_robot(breathing, HERE / "breathing_cube.json")
+    # the copy `softevo reproduce` ships inside the package (an installed softevo has no examples/)
+    dump_robot(breathing, HERE.parent / "softevo" / "reproduce" / "data" / "breathing_cube.json")
 
     rng = np.random.default_rng(2)
     cube = SpringRobot(

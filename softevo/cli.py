@@ -2,14 +2,17 @@
 when they run: `--help`, `serve` with Redis, `plot` and `db` never load it
 (tests/test_imports.py checks that in a fresh interpreter).
 
-Exit codes: 0 success, 1 bad input (one line on stderr naming the problem), 2 bad usage.
+Exit codes: 0 success, 1 bad input (one line on stderr naming the problem), 2 bad usage, 130
+interrupted (Ctrl-C), 141 stdout closed by its reader (`| head`; quietly, no traceback).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
+import os
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -36,6 +39,7 @@ def _positive_float(text: str) -> float:
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from softevo.core.evaluation import warm_up
     from softevo.core.physics import simulate
+    from softevo.core.robot import build_mechanics, dropped_voxels
     from softevo.core.robot_file import RobotFileError, load_robot, with_sim
 
     try:
@@ -46,6 +50,13 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             robot = with_sim(robot, terrain=args.terrain)
     except (RobotFileError, ValueError) as error:
         raise CommandError(f"{args.robot}: {error}") from None
+    dropped = dropped_voxels(robot, build_mechanics(robot))
+    if dropped:
+        print(
+            f"softevo simulate: {args.robot}: {dropped} filled voxel(s) not face-connected to "
+            "the largest group were dropped (not simulated)",
+            file=sys.stderr,
+        )
     record_every = max(1, round(1.0 / (args.fps * robot.sim.dt))) if args.trajectory else 0
     warm_up()  # load the compiled kernels first, so wall_seconds times the simulation alone
     result, trajectory = simulate(robot, record_every=record_every)
@@ -54,7 +65,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             Path(args.trajectory).write_text(json.dumps(trajectory.to_json()) + "\n")
         except OSError as error:
             raise CommandError(f"{args.trajectory}: cannot write ({error.strerror})") from None
-    print(json.dumps(result.to_json(), indent=2))
+    print(json.dumps({**result.to_json(), "dropped_voxels": dropped}, indent=2))
     return 0 if result.stable else 1
 
 
@@ -131,8 +142,10 @@ def build_parser() -> argparse.ArgumentParser:
             "Simulate ROBOT.json (format softevo.robot/1) and print one JSON object: masses, "
             "springs, steps, com_start, com_end, distance (m), speed (m/s), forward_speed "
             "(m/s along +x), climb_rate (m/s), energy (J of actuator work), cost_of_transport "
-            "(energy / (mass x g x distance)), wall_seconds, stable; all measured from "
-            "sim.settle_time on. Exits 1 if the file is invalid or the simulation blew up."
+            "(energy / (mass x g x distance)), wall_seconds, stable, dropped_voxels (filled "
+            "voxels not face-connected to the largest group, which are not built; also said "
+            "on stderr); all measured from sim.settle_time on. Exits 1 if the file is invalid "
+            "or the simulation blew up."
         ),
     )
     simulate.add_argument("robot", metavar="ROBOT.json", help="robot file")
@@ -157,7 +170,23 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _quiet_broken_pipe() -> int:
+    """stdout was closed by the reader (`softevo simulate ... | head`): stop without a
+    traceback, and keep Python's flush at exit from raising again. 141 = 128 + SIGPIPE."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    with contextlib.suppress(OSError, ValueError):  # a stdout without a descriptor (tests)
+        os.dup2(devnull, sys.stdout.fileno())
+    return 141
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    try:
+        return _main(argv)
+    except BrokenPipeError:
+        return _quiet_broken_pipe()
+
+
+def _main(argv: Sequence[str] | None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     handler: Callable[[argparse.Namespace], int] = args.handler

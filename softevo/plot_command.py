@@ -1,4 +1,5 @@
-"""`softevo plot`: a run's learning curve, population dot plot and diversity chart as a PNG."""
+"""`softevo plot`: a run's learning curve, population dot plot and diversity chart as a PNG,
+PDF or SVG (by the suffix of --out)."""
 
 from __future__ import annotations
 
@@ -18,15 +19,19 @@ KINDS = ("all", "curve", "population", "diversity")
 def add_parser(commands: Any) -> None:
     plot = commands.add_parser(
         "plot",
-        help="draw a run's curve, population dot plot and diversity chart as a PNG",
+        help="draw a run's curve, population dot plot and diversity chart (PNG, PDF or SVG)",
         description=(
             "Draw the paper's Figure 4(b)-(d) for one run: the learning curve, the population "
-            "dot plot and the diversity chart, stacked in one PNG (--kind picks one). RUN is a "
-            "`softevo run` output folder, or a run id of the service at --url."
+            "dot plot and the diversity chart, stacked in one figure (--kind picks one), written "
+            "as PNG, PDF or SVG by the suffix of --out. RUN is a `softevo run` output folder, "
+            "or a run id of the service at --url."
         ),
     )
     plot.add_argument("run", metavar="RUN_ID_OR_RESULTS_DIR")
-    plot.add_argument("--out", required=True, metavar="FIG.png", help="PNG file to write")
+    plot.add_argument(
+        "--out", required=True, metavar="FIG.png",
+        help="file to write; its suffix picks the format: .png, .pdf or .svg",
+    )  # fmt: skip
     plot.add_argument("--kind", choices=KINDS, default="all", help="which figure (all)")
     plot.add_argument(
         "--url",
@@ -57,6 +62,11 @@ def _from_service(url: str, run_id: int) -> tuple[dict[str, Any], list[Any], lis
 
 
 def plot_command(args: argparse.Namespace) -> int:
+    out = Path(args.out)
+    try:
+        figures.figure_format(out)
+    except ValueError as error:
+        args.parser.error(f"--out {error}")
     source = Path(args.run)
     try:
         if source.is_dir():
@@ -83,7 +93,6 @@ def plot_command(args: argparse.Namespace) -> int:
         ),
         "diversity": lambda: figures.diversity_figure(curve, f"diversity: {title}"),
     }[args.kind]()
-    out = Path(args.out)
     try:
         figures.save(figure, out)
     except OSError as error:

@@ -6,6 +6,8 @@ interrupted run still has its partial results:
     curve.json        {"run": config, "generations": [rows]}, the same as `softevo run --json`
     best_robot.json   the fastest robot so far, a softevo.robot/1 file
     state.json        the genetic algorithm's state (JSON), for inspection or resuming
+    cache.json        the fitness of every genome simulated so far (by genome hash) and the
+                      wall time, with state.json what `softevo run --resume DIR` goes on from
     population.csv    every individual: generation, index, fitness (empty: failed), operator
     curve.png, population.png, diversity.png   the run's figures, written at the end
     archive.json, archive.csv, archive.png     a run with descriptors: its MAP-Elites archive
@@ -21,8 +23,11 @@ import os
 from pathlib import Path
 from typing import Any
 
+from softevo.core.config import ConfigError, resolve
 from softevo.core.evolution import CURVE_COLUMNS, Evolution
+from softevo.core.ga.algorithm import GAState
 from softevo.core.ga.stats import QD_COLUMNS
+from softevo.core.nulls import from_null, to_null
 from softevo.core.robot_file import robot_to_json
 
 
@@ -54,6 +59,14 @@ def write_results(out: Path, evolution: Evolution) -> None:
     _write_json(out / "config.json", result["run"])
     _write_json(out / "curve.json", {"run": result["run"], "generations": result["generations"]})
     _write_json(out / "state.json", evolution.state.to_json())
+    _write_json(
+        out / "cache.json",
+        {
+            "generation": evolution.state.generation,  # of state.json, checked on resuming
+            "elapsed": evolution.elapsed,
+            "fitness": {key: to_null(value) for key, value in evolution.cache.items()},
+        },
+    )
     if result["best"] is not None:
         _write_json(out / "best_robot.json", result["best"]["robot"])
     temporary = out / "curve.csv.tmp"
@@ -135,3 +148,45 @@ def write_archive(out: Path, evolution: Evolution) -> dict[str, Any] | None:
             )  # fmt: skip
     os.replace(temporary, out / "archive.csv")
     return data
+
+
+def read_resumable(folder: Path, generations: int | None = None) -> Evolution:
+    """The stopped run in `folder` (config.json, state.json, cache.json), ready to go on, to
+    `generations` if given; ValueError with a one-line reason if it cannot."""
+    try:
+        config_json = json.loads((folder / "config.json").read_text(encoding="utf-8"))
+        state = GAState.from_json(json.loads((folder / "state.json").read_text(encoding="utf-8")))
+        cache = json.loads((folder / "cache.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError, KeyError, TypeError) as error:
+        raise ValueError(f"{folder}: not a resumable `softevo run` folder ({error})") from None
+    if cache.get("generation") != state.generation:
+        raise ValueError(
+            f"{folder}: cache.json is of generation {cache.get('generation')}, state.json of "
+            f"{state.generation} (stopped while writing); cannot resume"
+        )
+    if generations is not None:
+        if generations < state.generation:
+            raise ValueError(
+                f"--generations {generations}: the run already has {state.generation} generations"
+            )
+        config_json = {**config_json, "generations": generations}
+    try:
+        config = resolve(config_json)
+    except ConfigError as error:
+        raise ValueError(f"{folder}/config.json: {error}") from None
+    fitness = {key: from_null(value) for key, value in cache["fitness"].items()}
+    _trim_population(folder, state.generation)
+    return Evolution.resume(config, state, fitness, float(cache.get("elapsed", 0.0)))
+
+
+def _trim_population(folder: Path, generations: int) -> None:
+    """Keep population.csv's rows of the first `generations` generations (a run stopped
+    between writing its state and its population may hold one more)."""
+    path = folder / "population.csv"
+    if not path.exists():
+        return
+    with path.open(newline="", encoding="utf-8") as handle:
+        rows = list(csv.reader(handle))
+    kept = [rows[0], *(row for row in rows[1:] if int(row[0]) < generations)] if rows else []
+    with path.open("w", newline="", encoding="utf-8") as handle:
+        csv.writer(handle).writerows(kept)

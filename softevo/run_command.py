@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import sys
 from pathlib import Path
@@ -13,13 +14,14 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from softevo.core import figures
 from softevo.core.archive_figures import archive_figure
-from softevo.core.config import PRESET_DESCRIPTIONS, PRESETS, ConfigError, resolve
+from softevo.core.config import PRESET_DESCRIPTIONS, PRESETS, ConfigError, RunConfig, resolve
 from softevo.core.evolution import Evolution
 from softevo.core.ga.descriptors import CATALOGUE
 from softevo.core.objectives import OBJECTIVES
 from softevo.results import (
     append_population,
     read_results,
+    read_resumable,
     summary,
     write_archive,
     write_results,
@@ -33,22 +35,26 @@ def add_parser(commands: Any) -> None:
         description=(
             "Evolve robots in this process with a live progress bar. After every generation "
             "the output folder gets config.json, curve.csv, curve.json, best_robot.json, "
-            "state.json and population.csv, and at the end curve.png, population.png and "
-            "diversity.png; Ctrl-C stops and keeps them."
+            "state.json, cache.json and population.csv, and at the end curve.png, "
+            "population.png and diversity.png; Ctrl-C stops, keeps them and draws the figures "
+            "of the generations done. The default folder is named by the config "
+            "(softevo-runs/PRESET-SHAPE-seedN-HASH, HASH: 8 hex digits of the whole config), "
+            "and a folder holding another config's results is refused. --resume DIR goes on "
+            "with a stopped run to the same results an uninterrupted one gives."
         ),
     )
     presets = "; ".join(f"{name}: {PRESET_DESCRIPTIONS[name]}" for name in sorted(PRESETS))
-    run.add_argument(
-        "--preset", default="quick", choices=sorted(PRESETS), help=f"(quick) {presets}"
-    )
+    run.add_argument("--preset", choices=sorted(PRESETS), help=f"(quick) {presets}")
     run.add_argument("--shape", metavar="NXxNYxNZ", help="bounding box, e.g. 5x5x3")
     run.add_argument(
         "--encoding", choices=["voxel", "voxel-phase", "cube-springs", "spring"],
         help="voxel-phase: every actuated voxel evolves its own phase and amplitude (co-design)",
     )  # fmt: skip
-    run.add_argument("--seed", type=int, default=0, help="random seed (0)")
+    run.add_argument("--seed", type=int, help="random seed (0)")
     run.add_argument("--population", type=int, metavar="P")
-    run.add_argument("--generations", type=int, metavar="G")
+    run.add_argument(
+        "--generations", type=int, metavar="G", help="generations (with --resume: go on to G)"
+    )
     run.add_argument("--duration", type=float, metavar="S", help="simulated seconds per robot")
     run.add_argument(
         "--objective", choices=list(OBJECTIVES),
@@ -75,13 +81,22 @@ def add_parser(commands: Any) -> None:
     run.add_argument(
         "--workers", type=int, metavar="W", help="processes (default: one per core; 1 = serial)"
     )
-    run.add_argument("--out", metavar="DIR", help="output folder (softevo-runs/PRESET-seedN)")
+    run.add_argument(
+        "--out", metavar="DIR",
+        help="output folder (softevo-runs/PRESET-SHAPE-seedN-HASH); one holding another "
+        "config's results is refused",
+    )  # fmt: skip
+    run.add_argument(
+        "--resume", metavar="DIR",
+        help="go on with the stopped run in DIR (its config.json, state.json, cache.json), "
+        "writing there; only --generations, --workers and --json may be given with it",
+    )  # fmt: skip
     run.add_argument("--json", action="store_true", help="print the result as JSON at the end")
     run.set_defaults(handler=run_command)
 
 
 def _request(args: argparse.Namespace) -> dict[str, Any]:
-    request: dict[str, Any] = {"preset": args.preset, "seed": args.seed}
+    request: dict[str, Any] = {"preset": args.preset or "quick", "seed": args.seed or 0}
     for name in ("shape", "encoding", "population", "generations", "algorithm", "descriptors",
                  "bins"):  # fmt: skip
         if getattr(args, name) is not None:
@@ -128,18 +143,77 @@ def _writable(args: argparse.Namespace, out: Path) -> Path:
     return out
 
 
-def run_command(args: argparse.Namespace) -> int:
+def default_out(config: RunConfig) -> Path:
+    """softevo-runs/quick-3x3x3-seed0-1a2b3c4d: two configs never share a default folder."""
+    text = json.dumps(config.to_json(), sort_keys=True, separators=(",", ":"))
+    digest = hashlib.sha256(text.encode()).hexdigest()[:8]
+    shape = "x".join(map(str, config.shape))
+    return Path("softevo-runs") / f"{config.preset or 'custom'}-{shape}-seed{config.seed}-{digest}"
+
+
+def _not_anothers(args: argparse.Namespace, out: Path, config: RunConfig) -> None:
+    """Refuse a folder that holds the results of a different config (the same config's are
+    rewritten with the same numbers: a run is deterministic in its config)."""
+    try:
+        stored = json.loads((out / "config.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return
+    if stored != config.to_json():
+        args.parser.error(
+            f"--out {out}: holds the results of another config; give another --out, "
+            f"or --resume {out} to go on with that run"
+        )
+
+
+def _evolution(args: argparse.Namespace) -> tuple[Evolution, Path]:
+    """The run to do and its folder: a new one, or (--resume) a stopped one."""
+    if args.resume is not None:
+        given = [f"--{name}" for name in _CONFIG_FLAGS if getattr(args, name) is not None]
+        if args.out is not None:
+            given.append("--out")
+        if given:
+            args.parser.error(f"--resume takes the run's own config; drop {', '.join(given)}")
+        try:
+            evolution = read_resumable(Path(args.resume), args.generations)
+        except ValueError as error:
+            args.parser.error(f"--resume {error}")
+        return evolution, _writable(args, Path(args.resume))
     try:
         config = resolve(_request(args))
     except ConfigError as error:
         args.parser.error(str(error))
+    out = Path(args.out) if args.out else default_out(config)
+    _not_anothers(args, out, config)
+    return Evolution.start(config), _writable(args, out)
+
+
+_CONFIG_FLAGS = ("preset", "shape", "encoding", "seed", "population", "duration", "objective",
+                 "terrain", "algorithm", "descriptors", "bins")  # fmt: skip
+
+
+def _figures(out: Path, evolution: Evolution) -> None:
+    """curve.png, population.png, diversity.png of the generations finished so far, and for a
+    run with descriptors archive.json, archive.csv and the archive.png heat map."""
+    _, curve, individuals = read_results(out)
+    as_stored = evolution.config.to_json()
+    figures.run_figures(
+        curve, individuals, out, figures.run_title(as_stored), figures.fitness_label(as_stored)
+    )
+    archive = write_archive(out, evolution)
+    if archive is not None:
+        title = f"MAP-Elites archive: {figures.run_title(as_stored)}"
+        figure = archive_figure(archive, title, figures.fitness_label(as_stored))
+        figures.save(figure, out / "archive.png")
+
+
+def run_command(args: argparse.Namespace) -> int:
     if args.workers is not None and args.workers < 1:
         args.parser.error(f"--workers must be >= 1, got {args.workers}")
-    out = _writable(args, Path(args.out or f"softevo-runs/{config.preset}-seed{config.seed}"))
+    evolution, out = _evolution(args)
+    config = evolution.config
     from softevo.core.evaluation import make_evaluator  # the physics: loaded only to run
 
     console = Console(stderr=True)
-    evolution = Evolution.start(config)
     evaluator = make_evaluator(args.workers)
     columns = (
         TextColumn("generation"),
@@ -153,7 +227,10 @@ def run_command(args: argparse.Namespace) -> int:
     )
     try:
         with Progress(*columns, console=console, transient=args.json) as progress:
-            task = progress.add_task("run", total=config.generations, best="-", rate="-")
+            done = len(evolution.state.history)
+            task = progress.add_task(
+                "run", total=config.generations, completed=done, best="-", rate="-"
+            )
 
             def report(update: Any) -> None:
                 write_results(out, evolution)
@@ -168,25 +245,19 @@ def run_command(args: argparse.Namespace) -> int:
             evolution.run(evaluator, on_generation=report)
     except KeyboardInterrupt:
         done = len(evolution.state.history)
+        if done:
+            _figures(out, evolution)
         print(
             f"interrupted after {done} of {config.generations} generations; "
-            f"partial results in {out}/",
+            f"partial results{' and figures' if done else ''} in {out}/; "
+            f"go on with: softevo run --resume {out}",
             file=sys.stderr,
         )
         return 130
     finally:
         evaluator.close()
     write_results(out, evolution)
-    _, curve, individuals = read_results(out)
-    as_stored = config.to_json()
-    figures.run_figures(
-        curve, individuals, out, figures.run_title(as_stored), figures.fitness_label(as_stored)
-    )
-    archive = write_archive(out, evolution)
-    if archive is not None:
-        title = f"MAP-Elites archive: {figures.run_title(as_stored)}"
-        figure = archive_figure(archive, title, figures.fitness_label(as_stored))
-        figures.save(figure, out / "archive.png")
+    _figures(out, evolution)
     _print_summary(args, evolution, out)
     return 0
 

@@ -102,6 +102,7 @@ def serve_command(args: argparse.Namespace) -> int:
 
     if not 0 < args.port < 65536:
         args.parser.error(f"--port must be between 1 and 65535, got {args.port}")
+    _port_free(args.host, args.port)
     settings = _settings(args)
     if args.migrate:
         upgrade_command(argparse.Namespace(url=settings.database_url, parser=args.parser))
@@ -114,6 +115,24 @@ def serve_command(args: argparse.Namespace) -> int:
         **uvicorn_options(settings),
     )
     return 0
+
+
+def _port_free(host: str, port: int) -> None:
+    """Fail in one line before migrating or starting anything if the address is taken (uvicorn
+    would only find out after start-up, in a screenful of log). Bound as uvicorn binds."""
+    import socket
+
+    from softevo.cli import CommandError
+
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)
+        family, kind, proto, _, address = infos[0]
+        with socket.socket(family, kind, proto) as probe:
+            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            probe.bind(address)
+    except OSError as error:
+        reason = error.strerror or str(error)
+        raise CommandError(f"cannot listen on {host}:{port} ({reason})") from None
 
 
 def upgrade_command(args: argparse.Namespace) -> int:

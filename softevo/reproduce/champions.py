@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import json
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -16,12 +17,17 @@ from softevo.reproduce.tables import fmt
 # -- phase 1 ---------------------------------------------------------------------------------------
 
 
+def shipped_robot_text(name: str) -> str:
+    """A robot file shipped inside the package (an installed softevo has no examples/ folder)."""
+    return resources.files("softevo.reproduce").joinpath("data", name).read_text(encoding="utf-8")
+
+
 def breathing_cube(out: Path, quick: bool) -> dict[str, Any]:
     """The paper's phase 1: the shipped breathing cube, simulated here (one robot, no evolution)."""
     from softevo.core.physics import simulate
-    from softevo.core.robot_file import load_robot, with_sim
+    from softevo.core.robot_file import parse_robot, with_sim
 
-    robot = load_robot(Path(__file__).resolve().parents[2] / "examples" / "breathing_cube.json")
+    robot = parse_robot(json.loads(shipped_robot_text("breathing_cube.json")))
     if quick:
         robot = with_sim(robot, duration=2.0)
     result, trajectory = simulate(robot, record_every=max(1, round(1 / (100 * robot.sim.dt))))
@@ -29,12 +35,13 @@ def breathing_cube(out: Path, quick: bool) -> dict[str, Any]:
     heights = trajectory.frames[:, :, 2].mean(axis=1)
     xs = trajectory.frames[:, :, 0].mean(axis=1)
     plt = figures.pyplot()
-    figure, axes = plt.subplots(figsize=(5.5, 3.0))
+    figure, axes = plt.subplots(figsize=(7.5, 3.0))
     axes.plot(trajectory.times, heights, label="centre of mass height (m)")
     axes.plot(trajectory.times, xs - xs[0], label="centre of mass x shift (m)")
     axes.set_xlabel("time (s)")
-    axes.set_title("phase 1: the breathing cube dropped onto the ground")
-    axes.legend(frameon=False)
+    axes.set_ylabel("m")
+    axes.set_title("phase 1: breathing cube (1x1x1, not evolved), on flat ground")
+    axes.legend(frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     figure.tight_layout()
     figures.save(figure, out / "phase1_breathing_cube.png")
     return {

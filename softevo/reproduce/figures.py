@@ -62,12 +62,15 @@ def _figure4(experiments: Experiments, out: Path) -> dict[str, Any]:
     _bars(
         boxes,
         ["x".join(map(str, g.shape)) for g in boxes],
-        "Figure 4(a): best speed per bounding box (bars: mean, dots: seeds)",
+        "Figure 4(a): best speed on flat ground per bounding box (bars: mean, dots: seeds)",
         out / "fig4a_boxes.png",
     )
     best_box = max(boxes, key=lambda g: g.row()["best_mean"] or -math.inf)
     best_run = max(best_box.runs, key=lambda r: r["progress"]["best_fitness"] or -math.inf)
-    title = f"{'x'.join(map(str, best_box.shape))}, seed {best_run['seed']}"
+    title = (
+        f"{'x'.join(map(str, best_box.shape))}, seed {best_run['seed']}, speed on flat ground, "
+        "paper-voxel"
+    )
     curve = experiments.curve(best_run["id"])
     individuals = experiments.individuals(best_run["id"])
     figures.save(
@@ -96,7 +99,7 @@ def _past_the_paper(experiments: Experiments, out: Path) -> None:
     _curves(
         experiments,
         [("paper-cube", cube)],
-        "phase 2: the cube's learning curves",
+        "phase 2: the paper cube (1x1x1, speed on flat ground), best so far per seed",
         out / "phase2_cube.png",
         by="generation",
     )
@@ -104,7 +107,7 @@ def _past_the_paper(experiments: Experiments, out: Path) -> None:
     _curves(
         experiments,
         baselines,
-        f"GA against baselines, {'x'.join(map(str, plan.focus))}: best so far",
+        f"GA against baselines, {'x'.join(map(str, plan.focus))}, speed on flat ground",
         out / "baselines.png",
         by="evaluations",
     )
@@ -134,7 +137,7 @@ def _past_the_paper(experiments: Experiments, out: Path) -> None:
     _curves(
         experiments,
         [(g.variant, g) for g in ablation],
-        f"ablation, {'x'.join(map(str, plan.focus))}: best so far",
+        f"ablation, {'x'.join(map(str, plan.focus))}, speed on flat ground: best so far",
         out / "ablation_curves.png",
         by="evaluations",
     )
@@ -143,13 +146,28 @@ def _past_the_paper(experiments: Experiments, out: Path) -> None:
 def _curves(
     experiments: Experiments, groups: list[tuple[str, Group]], title: str, path: Path, by: str
 ) -> None:
-    """Best so far of every run of each group, against generation or cumulative evaluations."""
+    """Best so far of every run of each group, against generation or cumulative simulations."""
+    runs = [
+        [(run["seed"], experiments.curve(run["id"])) for run in group.runs] for _, group in groups
+    ]
+    labels = [label for label, _ in groups]
+    figures.save(curves_figure(list(zip(labels, runs, strict=True)), title, by), path)
+
+
+def curves_figure(
+    groups: list[tuple[str, list[tuple[int, list[dict[str, Any]]]]]], title: str, by: str
+) -> Any:
+    """Best so far per run, one legend entry per run (group and seed); one group: a colour per
+    seed, several: a colour per group and a line style per seed. `groups`: (label, [(seed,
+    curve rows)]); `by`: "generation" or "evaluations" (cumulative simulations)."""
+    from matplotlib.ticker import MaxNLocator
+
     plt = figures.pyplot()
-    figure, axes = plt.subplots(figsize=(6.0, 3.4))
-    colours = ["tab:blue", "tab:orange", "tab:green", "tab:red"]
-    for k, (label, group) in enumerate(groups):
-        for n, run in enumerate(group.runs):
-            curve = experiments.curve(run["id"])
+    figure, axes = plt.subplots(figsize=(7.0, 3.4))
+    colours = ["tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown"]
+    styles = ["-", "--", ":", "-."]
+    for k, (label, runs) in enumerate(groups):
+        for n, (seed, curve) in enumerate(runs):
             if by == "evaluations":
                 x, total = [], 0
                 for row in curve:
@@ -157,18 +175,19 @@ def _curves(
                     x.append(total)
             else:
                 x = [row["generation"] for row in curve]
-            y = [row["best_so_far"] for row in curve]
             axes.plot(
                 x,
-                y,
-                color=colours[k % len(colours)],
+                [row["best_so_far"] for row in curve],
+                color=colours[(n if len(groups) == 1 else k) % len(colours)],
+                linestyle="-" if len(groups) == 1 else styles[n % len(styles)],
                 alpha=0.8,
                 marker="." if len(x) < 20 else None,
-                label=label if n == 0 else None,
+                label=f"{label}, seed {seed}",
             )
     axes.set_xlabel("simulations" if by == "evaluations" else "generation")
-    axes.set_ylabel("best so far (m/s)")
+    axes.xaxis.set_major_locator(MaxNLocator(integer=True))
+    axes.set_ylabel("best speed so far (m/s)")
     axes.set_title(title)
-    axes.legend(frameon=False)
+    axes.legend(frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7)
     figure.tight_layout()
-    figures.save(figure, path)
+    return figure

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import json
+import socket
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -68,6 +71,11 @@ def test_example_crawler_crawls(examples: Path) -> None:
             ' "sim": {"dt": -1}}',
             "sim.dt",
         ),
+        # actuated voxels without their genes would run as a = b = c = 0, a still robot
+        (
+            '{"format": "softevo.robot/1", "shape": [2, 1, 1], "voxels": ["sine", "hard"]}',
+            "actuation: required: voxels has 1 sine",
+        ),
     ],
 )
 def test_bad_file_exits_nonzero_with_one_line(tmp_path: Path, content: str, words: str) -> None:
@@ -118,3 +126,45 @@ def test_hostile_robot_files_are_refused_in_one_line(tmp_path: Path, name: str, 
     lines = done.stderr.strip().splitlines()
     assert len(lines) == 1 and len(lines[0]) < 500, done.stderr[:1000]
     assert words in lines[0], lines[0]
+
+
+def test_simulate_says_how_many_cut_off_voxels_it_dropped(tmp_path: Path) -> None:
+    # a 4x1x1 bar with its second voxel empty: the first voxel is cut off from the other two
+    path = tmp_path / "apart.json"
+    path.write_text(
+        '{"format": "softevo.robot/1", "shape": [4, 1, 1], "voxels": ["hard", "empty", "hard",'
+        ' "hard"], "sim": {"duration": 0.3, "settle_time": 0.1}}'
+    )
+    done = softevo("simulate", str(path))
+    assert done.returncode == 0, done.stderr
+    result = json.loads(done.stdout)
+    assert result["dropped_voxels"] == 1
+    assert result["masses"] == 12  # the two joined voxels alone
+    assert "1 filled voxel(s) not face-connected" in done.stderr
+
+
+def test_simulate_into_a_closed_pipe_exits_quietly(examples: Path) -> None:
+    process = subprocess.Popen(
+        [sys.executable, "-P", "-m", "softevo.cli", "simulate", str(examples / "paper_cube.json"),
+         "--duration", "1.5"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    )  # fmt: skip
+    assert process.stdout is not None and process.stderr is not None
+    process.stdout.close()  # what `| head` does once it has its lines: the reader goes away
+    stderr = process.stderr.read().decode()
+    assert process.wait(timeout=120) == 141
+    assert stderr == "", stderr  # no BrokenPipeError traceback
+
+
+def test_serve_on_a_taken_port_fails_in_one_line_before_starting(tmp_path: Path) -> None:
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        done = softevo("serve", "--port", str(port), "--migrate", cwd=tmp_path)
+    assert done.returncode == 1
+    assert (
+        done.stderr == f"softevo serve: error: cannot listen on 127.0.0.1:{port} "
+        "(Address already in use)\n"
+    )
+    assert not (tmp_path / "softevo.db").exists()  # nothing migrated, nothing started

@@ -11,6 +11,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from xml.etree import ElementTree
 
 from softevo.core.robot_file import load_robot
 from tests.softevo.inprocess import softevo
@@ -58,6 +59,16 @@ def test_plot_draws_a_results_folder_and_refuses_what_is_not_one(tmp_path: Path)
         done = softevo("plot", str(out), "--out", str(figure), "--kind", kind)
         assert done.returncode == 0, done.stderr
         assert figure.read_bytes()[:4] == b"\x89PNG" and figure.stat().st_size > 10_000
+    pdf, svg = tmp_path / "x.pdf", tmp_path / "x.svg"  # the suffix picks the format
+    assert softevo("plot", str(out), "--out", str(pdf)).returncode == 0
+    assert pdf.read_bytes()[:4] == b"%PDF"
+    assert softevo("plot", str(out), "--out", str(svg), "--kind", "curve").returncode == 0
+    root = ElementTree.parse(svg).getroot()
+    assert root.tag == "{http://www.w3.org/2000/svg}svg"
+    assert "best so far" in svg.read_text()  # the legend's text
+    jpeg = softevo("plot", str(out), "--out", str(tmp_path / "x.jpg"))
+    assert jpeg.returncode == 2 and ".png, .pdf, .svg" in jpeg.stderr
+    assert not (tmp_path / "x.jpg").exists()
     bad = softevo("plot", str(tmp_path / "nothing-here"), "--out", str(tmp_path / "x.png"))
     assert bad.returncode == 1 and "neither a results folder nor a run id" in bad.stderr
     away = softevo("plot", "3", "--url", "http://127.0.0.1:9", "--out", str(tmp_path / "y.png"))
@@ -92,7 +103,50 @@ def test_ctrl_c_stops_cleanly_and_keeps_partial_results(tmp_path: Path) -> None:
     os.killpg(process.pid, signal.SIGINT)  # what Ctrl-C does: the whole process group
     _, stderr = process.communicate(timeout=120)
     assert process.returncode == 130, stderr
-    assert f"partial results in {out}/" in stderr
+    assert f"partial results and figures in {out}/" in stderr
+    assert f"softevo run --resume {out}" in stderr
     rows = list(csv.DictReader((out / "curve.csv").open()))
     assert 1 <= len(rows) < 100
+    for name in ("curve.png", "population.png", "diversity.png"):  # of the generations done
+        assert (out / name).read_bytes()[:4] == b"\x89PNG"
     assert load_robot(out / "best_robot.json").shape == (4, 4, 4)
+
+
+SMALL = ("--preset", "quick", "--population", "6", "--duration", "1", "--workers", "1")
+
+
+def test_default_folder_names_the_config_and_another_configs_folder_is_refused(
+    tmp_path: Path,
+) -> None:
+    for shape in ("2x2x2", "3x2x2"):
+        done = softevo("run", *SMALL, "--generations", "1", "--shape", shape, cwd=tmp_path)
+        assert done.returncode == 0, done.stderr
+    folders = sorted(p.name for p in (tmp_path / "softevo-runs").iterdir())
+    assert len(folders) == 2, folders  # the second run did not overwrite the first
+    assert [f.rsplit("-", 1)[0] for f in folders] == ["quick-2x2x2-seed0", "quick-3x2x2-seed0"]
+    for folder in folders:
+        config = json.loads((tmp_path / "softevo-runs" / folder / "config.json").read_text())
+        assert "x".join(map(str, config["shape"])) == folder.split("-")[1]
+    taken = tmp_path / "softevo-runs" / folders[0]
+    refused = softevo("run", *SMALL, "--generations", "1", "--shape", "3x2x2", "--out", str(taken))
+    assert refused.returncode == 2 and "holds the results of another config" in refused.stderr
+    assert json.loads((taken / "config.json").read_text())["shape"] == [2, 2, 2]
+
+
+def test_resume_goes_on_to_the_curve_of_an_uninterrupted_run(tmp_path: Path) -> None:
+    whole, stopped = tmp_path / "whole", tmp_path / "stopped"
+    run = ("run", *SMALL, "--shape", "2x2x2", "--seed", "3")
+    assert softevo(*run, "--generations", "5", "--out", str(whole)).returncode == 0
+    assert softevo(*run, "--generations", "2", "--out", str(stopped)).returncode == 0
+    resumed = softevo("run", "--resume", str(stopped), "--generations", "5", "--json")
+    assert resumed.returncode == 0, resumed.stderr
+    rows = json.loads(resumed.stdout)["generations"]
+    expected = json.loads((whole / "curve.json").read_text())
+    assert rows == expected["generations"] and len(rows) == 5
+    assert json.loads((stopped / "config.json").read_text()) == expected["run"]
+    assert (stopped / "curve.csv").read_text() == (whole / "curve.csv").read_text()
+    assert (stopped / "population.csv").read_text() == (whole / "population.csv").read_text()
+    again = softevo("run", "--resume", str(stopped), "--shape", "3x3x3")
+    assert again.returncode == 2 and "drop --shape" in again.stderr
+    nothing = softevo("run", "--resume", str(tmp_path / "nowhere"))
+    assert nothing.returncode == 2 and "not a resumable" in nothing.stderr
