@@ -2,9 +2,10 @@
 
 Each task is a terrain and the objective that fits it; everything else is the paper's phase 3,
 so a task's runs differ from `paper-voxel` only in where the robot is and what it is scored by.
-The robot starts on flat ground with its front (x = 4 m) half a metre before the first riser or
-bar, so every robot meets the feature; the sizes are for 1 m voxels that crawl a few metres in
-9 s (docs/tasks.md says how they were chosen).
+The robot starts on flat ground with its front (x = 4 m) 0.15 m before the first riser or bar:
+a good paper-voxel crawler covers about half a metre in the 9 measured seconds, so it meets the
+feature after a few seconds (with the first riser 0.5 m away, no robot of the first suite ever
+reached it: docs/tasks.md).
 """
 
 from __future__ import annotations
@@ -24,8 +25,8 @@ TASKS: dict[str, tuple[str, dict[str, Any], str]] = {
         "climb",
     ),
     "task-stairs": (
-        "climb stairs along +x: 0.2 m steps, 4.5 m treads (forward: progress along +x, m/s)",
-        {"kind": "steps", "height": 0.2, "depth": 4.5},
+        "climb stairs along +x: 0.2 m steps, 4.15 m treads (forward: progress along +x, m/s)",
+        {"kind": "steps", "height": 0.2, "depth": 4.15},
         "forward",
     ),
     "task-rough": (
@@ -34,8 +35,8 @@ TASKS: dict[str, tuple[str, dict[str, Any], str]] = {
         "speed",
     ),
     "task-hurdles": (
-        "cross bars 0.15 m high and 0.5 m long every 4.5 m along +x (forward, m/s)",
-        {"kind": "hurdles", "height": 0.15, "spacing": 4.5, "width": 0.5},
+        "cross bars 0.15 m high and 0.5 m long every 4.15 m along +x (forward, m/s)",
+        {"kind": "hurdles", "height": 0.15, "spacing": 4.15, "width": 0.5},
         "forward",
     ),
 }
