@@ -30,6 +30,7 @@ from softevo.reproduce.client import service
 from softevo.reproduce.experiments import Experiments, wall_seconds
 from softevo.reproduce.figures import write_figures
 from softevo.reproduce.plan import FULL, QUICK
+from softevo.reproduce.qd import run_qd, write_qd
 from softevo.reproduce.tables import fmt, write_tables
 from softevo.reproduce.tasks import run_suite, write_suite
 
@@ -53,7 +54,14 @@ def add_parser(commands: Any) -> None:
         "1-3, the GA against random search on its budget): tasks.csv, tasks.md, tasks.png",
     )  # fmt: skip
     parser.add_argument(
-        "--out", help="output folder (docs/experiments; with --tasks docs/experiments/tasks)"
+        "--qd", action="store_true",
+        help="run quality-diversity and co-design instead (4x4x3, 4x4x4, 3x3x6 x seeds 1-3: the "
+        "GA, MAP-Elites on its budget, voxel-phase): qd.csv, qd.md, qd.png, qd_archives.png",
+    )  # fmt: skip
+    parser.add_argument(
+        "--out",
+        help="output folder (docs/experiments; with --tasks docs/experiments/tasks, with --qd "
+        "docs/experiments/qd)",
     )
     parser.add_argument(
         "--url", help="a running service (token from SOFTEVO_API_TOKEN); default: start one"
@@ -72,7 +80,10 @@ def add_parser(commands: Any) -> None:
 
 def reproduce_command(args: argparse.Namespace) -> int:
     plan = QUICK if args.quick else FULL
-    out = Path(args.out or ("docs/experiments/tasks" if args.tasks else "docs/experiments"))
+    if args.tasks and args.qd:
+        args.parser.error("--tasks and --qd are two suites: run one at a time")
+    suite = "tasks" if args.tasks else "qd" if args.qd else None
+    out = Path(args.out or (f"docs/experiments/{suite}" if suite else "docs/experiments"))
     try:
         out.mkdir(parents=True, exist_ok=True)
         (out / ".write-test").touch()
@@ -81,8 +92,8 @@ def reproduce_command(args: argparse.Namespace) -> int:
         args.parser.error(f"--out {out}: cannot write there ({error.strerror})")
     started = time.monotonic()
     flags = " --quick" if args.quick else ""
-    if args.tasks:
-        return _task_suite(args, out, started)
+    if suite is not None:
+        return _suite(args, out, started, suite)
     print(f"softevo reproduce{flags}: results in {out}/", flush=True)
     phase1 = breathing_cube(out, args.quick)
     try:
@@ -106,23 +117,30 @@ def reproduce_command(args: argparse.Namespace) -> int:
     return 0
 
 
-def _task_suite(args: argparse.Namespace, out: Path, started: float) -> int:
+def _suite(args: argparse.Namespace, out: Path, started: float, suite: str) -> int:
+    """`--tasks` or `--qd`: one suite through the service, its table and figures."""
     flags = " --quick" if args.quick else ""
-    command = f"softevo reproduce --tasks{flags} --out {out}" + (
+    command = f"softevo reproduce --{suite}{flags} --out {out}" + (
         f" --url {args.url}" if args.url else ""
     )
     print(f"{command}: results in {out}/", flush=True)
     try:
         with service(args.url, out, args.workers, args.resume) as client:
-            rows = run_suite(client, args.quick)
+            if suite == "qd":
+                rows, archives = run_qd(client, args.quick)
+            else:
+                rows = run_suite(client, args.quick)
     except APIError as error:
         raise SystemExit(f"softevo reproduce: {error}") from None
     except UnreachableError as error:
         where = args.url or "the private service"
         raise SystemExit(f"softevo reproduce: error: {where}: {error}") from None
     wall = time.monotonic() - started
-    write_suite(rows, out, command, wall)
-    print(f"done in {wall:.0f} s: {out / 'tasks.md'}")
+    if suite == "qd":
+        write_qd(rows, archives, out, command, wall)
+    else:
+        write_suite(rows, out, command, wall)
+    print(f"done in {wall:.0f} s: {out / f'{suite}.md'}")
     return 0
 
 
