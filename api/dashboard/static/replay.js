@@ -68,7 +68,7 @@ export class Replay {
     // a co-designed robot (voxel-phase) has more than the paper's two phases: colour by hue
     const phases = new Set((data.phase || []).filter((p) => p !== null).map((p) => p.toFixed(4)));
     const byHue = phases.size > 2;
-    state.phaseColours = byHue ? "hue" : "two";
+    this.state.phaseColours = byHue ? "hue" : "two";
     const legend = h("div", { class: "muted" },
       "springs:", h("span", { class: "legend-swatch", style: "background:#9bc59d" }), "soft",
       h("span", { class: "legend-swatch", style: "background:#4a4f55" }), "hard",
@@ -106,6 +106,7 @@ export class Replay {
     ground.position.z = -0.002;  // the ground (z = 0) under the grid lines
     scene.background = new THREE.Color("#fbfcfd");
     const surface = data.terrain && data.terrain.mesh ? terrainMesh(data.terrain.mesh) : null;
+    state.terrain = surface ? data.terrain.kind : "flat";  // what the scene's ground is
     scene.add(...(surface ? surface : [ground, grid]), new THREE.AmbientLight(0xffffff, 1.2));
     const geometry = new THREE.BufferGeometry();
     const positions = new Float32Array(springs.length * 6);

@@ -361,3 +361,33 @@ def test_a_map_elites_run_shows_its_archive_and_replays_a_picked_elite(
         timeout=15000,
     )
     shot(page, "dashboard-archive")
+
+
+def test_a_run_on_stairs_replays_over_the_terrain(page: Any, server: httpx.Client) -> None:
+    body = {**SMALL, "preset": "task-stairs", "shape": [3, 3, 3], "generations": 2}
+    run_id = server.post("/runs", json=body).json()["id"]
+    wait(lambda: server.get(f"/runs/{run_id}").json()["status"] == "completed", 60, "stairs run")
+    page.goto(f"{page.base}/#/runs/{run_id}")
+    page.wait_for_function(
+        "window.softevo.replay && window.softevo.replay.frames > 0 && window.softevo.replay.drawn",
+        timeout=30000,
+    )
+    assert page.evaluate("window.softevo.replay.terrain") == "steps"
+    assert "steps" in page.text_content("#task") and "forward" in page.text_content("#task")
+    assert "terrain: steps" in page.text_content("#replay-measures")
+    page.eval_on_selector("#replay", "(p) => p.scrollIntoView({block: 'center'})")
+    shot(page, "dashboard-terrain")
+
+
+def test_a_co_designed_robot_is_coloured_by_phase(page: Any, server: httpx.Client) -> None:
+    body = {**SMALL, "encoding": "voxel-phase", "generations": 2}
+    run_id = server.post("/runs", json=body).json()["id"]
+    wait(lambda: server.get(f"/runs/{run_id}").json()["status"] == "completed", 60, "co-design")
+    page.goto(f"{page.base}/#/runs/{run_id}")
+    page.wait_for_function(
+        "window.softevo.replay && window.softevo.replay.frames > 0 && window.softevo.replay.drawn",
+        timeout=30000,
+    )
+    assert page.evaluate("window.softevo.replay.phaseColours") == "hue"
+    assert "coloured by phase" in page.text_content("#replay")
+    shot(page, "dashboard-voxel-phase")
