@@ -3,8 +3,6 @@ the same archive as `softevo run`'s, and errors that name the field."""
 
 from __future__ import annotations
 
-import time
-
 from fastapi.testclient import TestClient
 
 from softevo.core.config import resolve
@@ -13,22 +11,13 @@ from softevo.core.evolution import Evolution
 from softevo.core.ga.descriptors import describe
 from softevo.core.robot import LABELS
 from softevo.core.robot_file import parse_robot
+from tests.api.finished import finished
 
 QD = {
     "preset": "quick", "seed": 4, "population": 8, "generations": 3, "shape": [2, 2, 2],
     "algorithm": "map-elites", "descriptors": ["voxels", "actuated"], "bins": [4, 3],
     "sim": {"duration": 1.0, "settle_time": 0.3},
 }  # fmt: skip
-
-
-def finished(client: TestClient, run_id: int, timeout: float = 60) -> dict:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        run = client.get(f"/runs/{run_id}").json()
-        if run["status"] not in ("queued", "running"):
-            return run
-        time.sleep(0.05)
-    raise AssertionError(f"run {run_id} still {run['status']}")
 
 
 def test_a_map_elites_run_serves_the_archive_softevo_run_builds(client: TestClient) -> None:

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import time
-
 import pytest
 from fastapi.testclient import TestClient
 
 from softevo.core.physics import simulate
 from softevo.core.robot_file import parse_robot
 from softevo.core.tasks import TASKS
+from tests.api.finished import finished
 
 TINY = {
     "population": 4,
@@ -17,16 +16,6 @@ TINY = {
     "shape": [2, 2, 2],
     "sim": {"duration": 1.0, "settle_time": 0.3},
 }
-
-
-def finished(client: TestClient, run_id: int, timeout: float = 60) -> dict:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        run = client.get(f"/runs/{run_id}").json()
-        if run["status"] not in ("queued", "running"):
-            return run
-        time.sleep(0.05)
-    raise AssertionError(f"run {run_id} still {run['status']}")
 
 
 def test_a_run_on_a_slope_is_scored_by_its_objective(client: TestClient) -> None:
