@@ -37,36 +37,30 @@ def _positive_float(text: str) -> float:
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from softevo.core.evaluation import warm_up
-    from softevo.core.physics import simulate
-    from softevo.core.robot import build_mechanics, dropped_voxels
-    from softevo.core.robot_file import RobotFileError, load_robot, with_sim
+    from softevo import library
+    from softevo.core.robot_file import RobotFileError
 
+    fps = args.fps if args.trajectory else None
     try:
-        robot = load_robot(args.robot)
-        if args.duration is not None:
-            robot = with_sim(robot, duration=args.duration)
-        if args.terrain is not None:
-            robot = with_sim(robot, terrain=args.terrain)
-    except (RobotFileError, ValueError) as error:
-        raise CommandError(f"{args.robot}: {error}") from None
-    dropped = dropped_voxels(robot, build_mechanics(robot))
-    if dropped:
+        measures = library.simulate(
+            args.robot, duration=args.duration, terrain=args.terrain, trajectory_fps=fps
+        )
+    except RobotFileError as error:
+        raise CommandError(str(error)) from None
+    if measures["dropped_voxels"]:
         print(
-            f"softevo simulate: {args.robot}: {dropped} filled voxel(s) not face-connected to "
-            "the largest group were dropped (not simulated)",
+            f"softevo simulate: {args.robot}: {measures['dropped_voxels']} filled voxel(s) not "
+            "face-connected to the largest group were dropped (not simulated)",
             file=sys.stderr,
         )
-    record_every = max(1, round(1.0 / (args.fps * robot.sim.dt))) if args.trajectory else 0
-    warm_up()  # load the compiled kernels first, so wall_seconds times the simulation alone
-    result, trajectory = simulate(robot, record_every=record_every)
+    trajectory = measures.pop("trajectory", None)
     if trajectory is not None:
         try:
-            Path(args.trajectory).write_text(json.dumps(trajectory.to_json()) + "\n")
+            Path(args.trajectory).write_text(json.dumps(trajectory) + "\n")
         except OSError as error:
             raise CommandError(f"{args.trajectory}: cannot write ({error.strerror})") from None
-    print(json.dumps({**result.to_json(), "dropped_voxels": dropped}, indent=2))
-    return 0 if result.stable else 1
+    print(json.dumps(measures, indent=2))
+    return 0 if measures["stable"] else 1
 
 
 def _cmd_export(args: argparse.Namespace) -> int:

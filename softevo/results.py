@@ -28,22 +28,7 @@ from softevo.core.evolution import CURVE_COLUMNS, Evolution
 from softevo.core.ga.algorithm import GAState
 from softevo.core.ga.stats import QD_COLUMNS
 from softevo.core.nulls import from_null, to_null
-from softevo.core.robot_file import robot_to_json
-
-
-def summary(evolution: Evolution) -> dict[str, Any]:
-    """The run's result as JSON: config, learning curve, best robot, counters."""
-    best = evolution.best_robot()
-    return {
-        "run": evolution.config.to_json(),
-        "generations": evolution.curve(),
-        "best": None
-        if best is None
-        else {"speed": best[1], "generation": best[2], "robot": robot_to_json(best[0])},
-        "evaluations": evolution.evaluations,
-        "saved": evolution.saved,
-        "wall_seconds": round(evolution.elapsed, 3),
-    }
+from softevo.library import Result
 
 
 def _write_json(path: Path, data: Any) -> None:
@@ -55,10 +40,10 @@ def _write_json(path: Path, data: Any) -> None:
 
 def write_results(out: Path, evolution: Evolution) -> None:
     out.mkdir(parents=True, exist_ok=True)
-    result = summary(evolution)
-    _write_json(out / "config.json", result["run"])
-    _write_json(out / "curve.json", {"run": result["run"], "generations": result["generations"]})
-    _write_json(out / "state.json", evolution.state.to_json())
+    result = Result.of(evolution)
+    _write_json(out / "config.json", result.config)
+    _write_json(out / "curve.json", {"run": result.config, "generations": result.curve})
+    _write_json(out / "state.json", result.state)
     _write_json(
         out / "cache.json",
         {
@@ -67,14 +52,14 @@ def write_results(out: Path, evolution: Evolution) -> None:
             "fitness": {key: to_null(value) for key, value in evolution.cache.items()},
         },
     )
-    if result["best"] is not None:
-        _write_json(out / "best_robot.json", result["best"]["robot"])
+    if result.best is not None:
+        _write_json(out / "best_robot.json", result.best)
     temporary = out / "curve.csv.tmp"
     with temporary.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle)
         columns = CURVE_COLUMNS + (QD_COLUMNS if evolution.config.descriptors else ())
         writer.writerow(columns)
-        for row in result["generations"]:
+        for row in result.curve:
             writer.writerow(
                 [
                     "" if v is None or (isinstance(v, float) and math.isnan(v)) else v

@@ -18,11 +18,11 @@ from softevo.core.config import PRESET_DESCRIPTIONS, PRESETS, ConfigError, RunCo
 from softevo.core.evolution import Evolution
 from softevo.core.ga.descriptors import CATALOGUE
 from softevo.core.objectives import OBJECTIVES
+from softevo.library import Result, Run
 from softevo.results import (
     append_population,
     read_results,
     read_resumable,
-    summary,
     write_archive,
     write_results,
 )
@@ -211,10 +211,7 @@ def run_command(args: argparse.Namespace) -> int:
         args.parser.error(f"--workers must be >= 1, got {args.workers}")
     evolution, out = _evolution(args)
     config = evolution.config
-    from softevo.core.evaluation import make_evaluator  # the physics: loaded only to run
-
     console = Console(stderr=True)
-    evaluator = make_evaluator(args.workers)
     columns = (
         TextColumn("generation"),
         MofNCompleteColumn(),
@@ -242,7 +239,7 @@ def run_command(args: argparse.Namespace) -> int:
                     rate=f"{update.evaluations_per_second:.1f}",
                 )
 
-            evolution.run(evaluator, on_generation=report)
+            result = Run(evolution, args.workers).finish(on_generation=report)
     except KeyboardInterrupt:
         done = len(evolution.state.history)
         if done:
@@ -254,25 +251,23 @@ def run_command(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 130
-    finally:
-        evaluator.close()
     write_results(out, evolution)
     _figures(out, evolution)
-    _print_summary(args, evolution, out)
+    _print_summary(args, result, out)
     return 0
 
 
-def _print_summary(args: argparse.Namespace, evolution: Evolution, out: Path) -> None:
-    config, result = evolution.config, summary(evolution)
+def _print_summary(args: argparse.Namespace, result: Result, out: Path) -> None:
+    config = result.config
     if args.json:
-        print(json.dumps({**result, "out": str(out)}, allow_nan=False))
+        print(json.dumps({**result.to_json(), "out": str(out)}, allow_nan=False))
     else:
-        best = result["best"]
         print(
-            f"{config.generations} generations of {config.population} "
-            f"({config.encoding}, {'x'.join(map(str, config.shape))}, seed {config.seed}): "
-            f"best {best['speed']:.4f} m/s (generation {best['generation']}), "
-            f"{result['evaluations']} simulations, {result['saved']} saved by the cache, "
-            f"{result['wall_seconds']:.1f} s\nresults in {out}/",
+            f"{config['generations']} generations of {config['population']} "
+            f"({config['encoding']}, {'x'.join(map(str, config['shape']))}, "
+            f"seed {config['seed']}): best {result.best_fitness:.4f} m/s "
+            f"(generation {result.best_generation}), "
+            f"{result.evaluations} simulations, {result.saved} saved by the cache, "
+            f"{result.wall_seconds:.1f} s\nresults in {out}/",
             file=sys.stdout,
         )
