@@ -15,6 +15,17 @@ BLOCK = re.compile(r"^```python\n(.*?)^```$", re.MULTILINE | re.DOTALL)
 #: What a section must print besides running cleanly (a block that silently does nothing fails).
 PRINTS = {
     "The service (the client)": ["completed", "best speed: ", "softevo.robot/1", "422 population"],
+    "In-process (the library)": [
+        "3 best ",
+        "best speed: ",
+        "same speed as in the run: True",
+        " 31 frames",
+        "generation 3: diversity",
+        "stepped like evolve: True",
+        "archive coverage: ",
+        "ConfigError: population: ",
+        "RobotFileError: sim.duration: ",
+    ],
 }
 
 
@@ -29,7 +40,7 @@ def sections() -> dict[str, str]:
     return found
 
 
-def test_the_client_section_is_there() -> None:
+def test_the_client_and_library_sections_are_there() -> None:
     assert set(PRINTS) <= set(sections())
 
 
