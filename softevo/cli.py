@@ -139,7 +139,7 @@ def build_parser() -> argparse.ArgumentParser:
             "(energy / (mass x g x distance)), wall_seconds, stable, dropped_voxels (filled "
             "voxels not face-connected to the largest group, which are not built; also said "
             "on stderr); all measured from sim.settle_time on. Exits 1 if the file is invalid "
-            "or the simulation blew up."
+            "or the simulation blew up. From Python: softevo.library.simulate (docs/python.md)."
         ),
     )
     simulate.add_argument("robot", metavar="ROBOT.json", help="robot file")

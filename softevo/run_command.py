@@ -40,7 +40,8 @@ def add_parser(commands: Any) -> None:
             "of the generations done. The default folder is named by the config "
             "(softevo-runs/PRESET-SHAPE-seedN-HASH, HASH: 8 hex digits of the whole config), "
             "and a folder holding another config's results is refused. --resume DIR goes on "
-            "with a stopped run to the same results an uninterrupted one gives."
+            "with a stopped run to the same results an uninterrupted one gives. From Python: "
+            "softevo.library.evolve (docs/python.md)."
         ),
     )
     presets = "; ".join(f"{name}: {PRESET_DESCRIPTIONS[name]}" for name in sorted(PRESETS))
