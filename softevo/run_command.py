@@ -27,22 +27,24 @@ from softevo.results import (
     write_results,
 )
 
+DESCRIPTION = (
+    "Evolve robots in this process with a live progress bar. After every generation "
+    "the output folder gets config.json, curve.csv, curve.json, best_robot.json, "
+    "state.json, cache.json and population.csv, and at the end curve.png, "
+    "population.png and diversity.png; Ctrl-C stops, keeps them and draws the figures "
+    "of the generations done. The default folder is named by the config "
+    "(softevo-runs/PRESET-SHAPE-seedN-HASH, HASH: 8 hex digits of the whole config), "
+    "and a folder holding another config's results is refused. --resume DIR goes on "
+    "with a stopped run to the same results an uninterrupted one gives. From Python: "
+    "softevo.library.evolve (docs/python.md)."
+)
+
 
 def add_parser(commands: Any) -> None:
     run = commands.add_parser(
         "run",
         help="run a whole evolution experiment in this process",
-        description=(
-            "Evolve robots in this process with a live progress bar. After every generation "
-            "the output folder gets config.json, curve.csv, curve.json, best_robot.json, "
-            "state.json, cache.json and population.csv, and at the end curve.png, "
-            "population.png and diversity.png; Ctrl-C stops, keeps them and draws the figures "
-            "of the generations done. The default folder is named by the config "
-            "(softevo-runs/PRESET-SHAPE-seedN-HASH, HASH: 8 hex digits of the whole config), "
-            "and a folder holding another config's results is refused. --resume DIR goes on "
-            "with a stopped run to the same results an uninterrupted one gives. From Python: "
-            "softevo.library.evolve (docs/python.md)."
-        ),
+        description=DESCRIPTION,
     )
     presets = "; ".join(f"{name}: {PRESET_DESCRIPTIONS[name]}" for name in sorted(PRESETS))
     run.add_argument("--preset", choices=sorted(PRESETS), help=f"(quick) {presets}")
