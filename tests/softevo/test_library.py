@@ -9,11 +9,17 @@ import sys
 from pathlib import Path
 
 import pytest
+from fastapi.testclient import TestClient
 
 from softevo import library
+from softevo.api.app import create_app
+from softevo.api.db import Database
+from softevo.api.settings import Settings
 from softevo.core.config import ConfigError, resolve
+from softevo.core.evaluation import SerialEvaluator
 from softevo.core.physics import simulate as core_simulate
 from softevo.core.robot_file import RobotFileError, load_robot, with_sim
+from tests.api.finished import finished
 from tests.softevo.inprocess import softevo
 
 TINY = {"population": 6, "generations": 3, "seed": 4, "sim": {"duration": 1.0}}
@@ -39,6 +45,21 @@ def test_evolve_gives_the_curve_and_files_of_softevo_run(tmp_path: Path) -> None
     assert {k: v for k, v in result.to_json().items() if k != "wall_seconds"} == {
         k: v for k, v in printed.items() if k not in ("wall_seconds", "out")
     }
+
+
+def test_evolve_gives_the_curve_and_best_robot_of_the_service(tmp_path: Path) -> None:
+    url = f"sqlite:///{tmp_path / 'softevo.db'}"
+    Database(url).upgrade()
+    settings = Settings(database_url=url, poll_seconds=0.05, lease_seconds=5.0)
+    with TestClient(create_app(settings, lambda _settings: SerialEvaluator())) as client:
+        created = client.post("/runs", json={"preset": "quick", **TINY})
+        assert created.status_code == 201, created.text
+        run_id = created.json()["id"]
+        assert finished(client, run_id)["status"] == "completed"
+        curve = client.get(f"/runs/{run_id}/curve").json()["generations"]
+        best = client.get(f"/runs/{run_id}/best").json()
+    result = library.evolve(preset="quick", workers=1, **TINY)
+    assert result.curve == curve and result.best == best
 
 
 def test_the_curve_is_the_same_on_one_worker_and_two() -> None:
