@@ -15,7 +15,8 @@ export async function sweepView(sweepId) {
   // every run's seed: the curves are named by it (the box or task is the chart's title)
   const seeds = {};
   await Promise.all(boxes.flatMap((b) => b.run_ids).map(async (id) => { seeds[id] = (await api(`/runs/${id}`)).seed; }));
-  softevo.sweep = { seeds, labels: {} };
+  // for tests: the status when opened, updates drawn, whether it is still being followed
+  softevo.sweep = { seeds, labels: {}, opened: sweep.status, updates: 0, following: ACTIVE.includes(sweep.status) };
 
   const title = h("h2", {});
   const table = h("table", { id: "sweep-boxes" });
@@ -25,7 +26,7 @@ export async function sweepView(sweepId) {
     title.replaceChildren(`Sweep ${sweepId} `, status(sweep.status));
     table.replaceChildren(
       h("tr", {}, [byTask ? "task" : "box", "runs (seed)", "completed", `best mean (${unit})`, "spread (std)", "min", "max"].map((t) => h("th", {}, t))),
-      sweep.boxes.map((b) => h("tr", {}, h("td", {}, name(b)),
+      ...sweep.boxes.map((b) => h("tr", {}, h("td", {}, name(b)),
         h("td", {}, b.run_ids.map((id, i) => h("a", { href: `#/runs/${id}`, title: b.statuses[i], style: "margin-right:.4rem" }, `#${id} (${seeds[id]})`))),
         h("td", { class: "num" }, `${b.completed}/${b.run_ids.length}`),
         h("td", { class: "num" }, fmt(b.best_mean)), h("td", { class: "num" }, fmt(b.best_std)),
@@ -73,7 +74,11 @@ export async function sweepView(sweepId) {
       showTable();
       barPlot.setData(barData());
       for (const [runIds, plot] of curvePlots) plot.setData(await curveData({ run_ids: runIds }));
-      if (!ACTIVE.includes(sweep.status)) clearInterval(timer);
+      softevo.sweep.updates += 1;
+      if (!ACTIVE.includes(sweep.status)) {
+        clearInterval(timer);
+        softevo.sweep.following = false;
+      }
     } catch (error) { /* the next tick retries */ }
     busy = false;
   }, 2000);

@@ -67,6 +67,7 @@ export function sweepsPanel(presets) {
       }));
     if (!page.items.length) table.append(h("tr", {}, h("td", { colspan: 6, class: "muted" }, "No sweeps yet: start one above.")));
   }
-  const panel = h("div", { class: "panel" }, h("h3", {}, "Start a sweep"), form, h("h3", {}, "Sweeps"), table);
+  const panel = h("div", {}, h("div", { class: "panel" }, h("h3", {}, "Start a sweep"), form),
+    h("div", { class: "panel" }, h("h3", {}, "Sweeps"), table));
   return { panel, refresh };
 }

@@ -161,7 +161,7 @@ def test_sweeps_are_listed_started_and_followed_live(
     page.fill("#sweep-form input[name=shapes]", "2x2x2 3x2x2")
     page.fill("#sweep-form input[name=seeds]", "5 6")
     page.fill("#sweep-form input[name=population]", "4")
-    page.fill("#sweep-form input[name=generations]", "3")
+    page.fill("#sweep-form input[name=generations]", "6")
     page.click("#sweep-form button[type=submit]")
     page.wait_for_function("location.hash.startsWith('#/sweeps/')", timeout=15000)
     sweep_id = int(page.evaluate("location.hash").rsplit("/", 1)[1])
@@ -172,9 +172,11 @@ def test_sweeps_are_listed_started_and_followed_live(
     # followed live: the page reaches "completed" without a reload, its bars the API's means
     page.wait_for_function(
         "document.querySelector('h2 .status').textContent === 'completed' && "
-        "window.softevo.charts.boxes.data[1].every(v => v !== null)",
+        "window.softevo.sweep.following === false",
         timeout=120000,
     )
+    assert page.evaluate("window.softevo.sweep.opened") in ("queued", "running")
+    assert page.evaluate("window.softevo.sweep.updates") >= 1
     done = server.get(f"/sweeps/{sweep_id}").json()
     assert page.evaluate("window.softevo.charts.boxes.data[1]") == [
         b["best_mean"] for b in done["boxes"]
@@ -192,6 +194,14 @@ def test_sweeps_are_listed_started_and_followed_live(
     curve = server.get(f"/runs/{done['boxes'][0]['run_ids'][1]}/curve").json()["generations"]
     drawn = page.evaluate(f"window.softevo.charts['{chart}'].data[2]")
     assert drawn == [row["best_so_far"] for row in curve]
+    rows = page.eval_on_selector_all(
+        "#sweep-boxes tr", "rs => rs.map(r => [...r.cells].map(c => c.textContent))"
+    )
+    ids = [b["run_ids"] for b in done["boxes"]]
+    assert [row[:3] for row in rows[1:]] == [
+        [f"2{X}2{X}2", f"#{ids[0][0]} (5)#{ids[0][1]} (6)", "2/2"],
+        [f"3{X}2{X}2", f"#{ids[1][0]} (5)#{ids[1][1]} (6)", "2/2"],
+    ]
     shot(page, "dashboard-sweep-live")
     # the list shows it with its boxes, seeds and runs completed
     page.goto(f"{page.base}/#/")
