@@ -54,11 +54,13 @@ export const h = (tag, attrs = {}, ...children) => {
 };
 export const fmt = (value, digits = 4) => (value === null || value === undefined ? "–" : Number(value).toFixed(digits));
 export const box = (shape) => (shape ? shape.join("×") : "–");
-// seconds between two of the API's timestamps, as "2 min 05 s" (null when either is missing)
+// seconds between two of the API's timestamps, as "2 min 05 s" or "3.4 s" (null when either is missing)
 export function duration(from, to) {
   if (!from || !to) return null;
   const utc = (t) => new Date(/(Z|[+-]\d\d:?\d\d)$/i.test(t) ? t : `${t}Z`);  // SQLite's have no zone
-  const s = Math.max(0, Math.round((utc(to) - utc(from)) / 1000));
+  const exact = Math.max(0, (utc(to) - utc(from)) / 1000);
+  if (exact < 9.95) return `${exact.toFixed(1)} s`;
+  const s = Math.round(exact);
   const [hours, minutes, seconds] = [Math.floor(s / 3600), Math.floor((s % 3600) / 60), s % 60];
   const pad = (n) => String(n).padStart(2, "0");
   if (hours) return `${hours} h ${pad(minutes)} min`;

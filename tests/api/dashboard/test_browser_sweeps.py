@@ -31,7 +31,10 @@ def wall_time(started: str, finished: str) -> str:
     """The dashboard's words for the seconds between two of the API's timestamps."""
     zoned = [datetime.fromisoformat(t if t[-1] == "Z" or "+" in t else t + "+00:00")
              for t in (started, finished)]  # fmt: skip
-    s = max(0, round((zoned[1] - zoned[0]).total_seconds()))
+    exact = max(0.0, (zoned[1] - zoned[0]).total_seconds())
+    if exact < 9.95:
+        return f"{exact:.1f} s"
+    s = round(exact)
     hours, minutes, seconds = s // 3600, s % 3600 // 60, s % 60
     if hours:
         return f"{hours} h {minutes:02d} min"
@@ -115,7 +118,18 @@ def test_a_finished_run_shows_its_wall_time(
     page.goto(f"{page.base}/#/runs/{done}")
     page.wait_for_selector("#wall-time")
     expected = wall_time(run["started_at"], run["finished_at"])
-    assert page.text_content("#wall-time") == f", wall time {expected}"
+    # longer ones in minutes and hours, with or without a time zone on the timestamps
+    said = page.evaluate("""async () => { const {duration} = await import('/static/api.js');
+        return [duration('2026-01-01T00:00:00', '2026-01-01T00:02:05.4'),
+                duration('2026-01-01T00:00:00+00:00', '2026-01-01T01:03:00Z'),
+                duration(null, '2026-01-01T00:00:00')]; }""")
+    assert said == ["2 min 05 s", "1 h 03 min", None]
+    shown = page.text_content("#wall-time")
+    assert shown.startswith(", wall time ")
+    if expected.endswith(" s") and "." in expected:  # the browser's clock has milliseconds only
+        assert float(shown.split()[-2]) == pytest.approx(float(expected.split()[0]), abs=0.11)
+    else:
+        assert shown == f", wall time {expected}"
 
 
 LOOK = """() => [window.softevo.replay && window.softevo.replay.label,
