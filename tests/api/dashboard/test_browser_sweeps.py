@@ -185,7 +185,7 @@ def test_sweeps_are_listed_started_and_followed_live(
     page.wait_for_function("window.softevo.charts.boxes !== undefined", timeout=30000)
     # followed live: the page reaches "completed" without a reload, its bars the API's means
     page.wait_for_function(
-        "document.querySelector('h2 .status').textContent === 'completed' && "
+        "document.querySelector('h2 .status')?.textContent === 'completed' && "
         "window.softevo.sweep.following === false",
         timeout=120000,
     )
@@ -232,3 +232,42 @@ def test_sweeps_are_listed_started_and_followed_live(
     ]
     page.eval_on_selector("#sweeps", "(t) => t.scrollIntoView({block: 'center'})")
     shot(page, "dashboard-sweeps")
+
+
+def test_a_sweep_over_tasks_is_started_from_the_form(
+    page: Any,  # noqa: F811
+    server: httpx.Client,  # noqa: F811
+) -> None:
+    page.goto(f"{page.base}/#/")
+    page.wait_for_selector("#sweep-form")
+    page.select_option("#sweep-form select[name=over]", "tasks")
+    # each task is a preset with its own box: neither is asked for
+    assert not page.is_visible("#sweep-form select[name=preset]")
+    assert not page.is_visible("#sweep-form input[name=shapes]")
+    for task in page.eval_on_selector_all(
+        "#sweep-form input[name=tasks]", "ts => ts.map(t => t.value)"
+    ):
+        if task not in ("task-flat", "task-slope"):
+            page.uncheck(f"#sweep-form input[value={task}]")
+    page.fill("#sweep-form input[name=seeds]", "3")
+    page.fill("#sweep-form input[name=population]", "4")
+    page.fill("#sweep-form input[name=generations]", "1")
+    page.click("#sweep-form button[type=submit]")
+    page.wait_for_function("location.hash.startsWith('#/sweeps/')", timeout=15000)
+    sweep_id = int(page.evaluate("location.hash").rsplit("/", 1)[1])
+    sweep = server.get(f"/sweeps/{sweep_id}").json()
+    assert sweep["request"]["tasks"] == ["task-flat", "task-slope"]
+    assert "preset" not in sweep["request"] and sweep["request"]["seeds"] == [3]
+    page.wait_for_function(
+        "document.querySelector('h2 .status')?.textContent === 'completed' && "
+        "window.softevo.sweep && window.softevo.sweep.following === false",
+        timeout=120000,
+    )
+    rows = page.eval_on_selector_all(
+        "#sweep-boxes tr td:first-child", "ts => ts.map(t => t.textContent)"
+    )
+    assert [row.split()[0] for row in rows] == ["task-flat", "task-slope"]
+    titles = page.eval_on_selector_all(".panel h3", "hs => hs.map(h => h.textContent)")
+    assert any(t.startswith("task-slope") and t.endswith("best so far per seed") for t in titles)
+    names = page.evaluate("Object.values(window.softevo.sweep.labels)")
+    assert names == [["seed 3"], ["seed 3"]]
