@@ -66,6 +66,7 @@ export async function sweepView(sweepId) {
   // live: the table, the bars and the curves every 2 s while a run is queued or running
   if (!ACTIVE.includes(sweep.status)) return;
   let busy = false;
+  const last = Object.fromEntries(sweep.boxes.flatMap((b) => b.run_ids.map((id, i) => [id, b.statuses[i]])));
   const timer = setInterval(async () => {
     if (busy) return;
     busy = true;
@@ -73,7 +74,10 @@ export async function sweepView(sweepId) {
       sweep = await api(`/sweeps/${sweepId}`);
       showTable();
       barPlot.setData(barData());
-      for (const [runIds, plot] of curvePlots) plot.setData(await curveData({ run_ids: runIds }));
+      // only the curves of runs that were active at the last look can have grown
+      const moving = new Set(sweep.boxes.flatMap((b) => b.run_ids.filter((id, i) => ACTIVE.includes(b.statuses[i]) || ACTIVE.includes(last[id]))));
+      for (const b of sweep.boxes) b.run_ids.forEach((id, i) => { last[id] = b.statuses[i]; });
+      for (const [runIds, plot] of curvePlots) if (runIds.some((id) => moving.has(id))) plot.setData(await curveData({ run_ids: runIds }));
       softevo.sweep.updates += 1;
       if (!ACTIVE.includes(sweep.status)) {
         clearInterval(timer);
