@@ -10,9 +10,9 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, create_model
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, create_model
 
-from softevo.core.config import PAPER_NINE_SHAPES
+from softevo.core.config import PAPER_NINE_SHAPES, parse_shape
 from softevo.core.ga.algorithm import GAConfig
 from softevo.core.limits import MAX_SIDE
 from softevo.core.objectives import Objective
@@ -23,6 +23,15 @@ from softevo.core.terrain import Terrain
 # Strict numbers in every body: no bool or string for a number, no float for a count.
 Side = Annotated[int, Field(ge=1, le=MAX_SIDE, strict=True)]
 Shape = tuple[Side, Side, Side]
+
+
+def _shape_text(value: Any) -> Any:
+    """ "5x5x3", as the CLI takes it, refused in the CLI's words; a list is checked as one."""
+    return parse_shape(value) if isinstance(value, str) else value
+
+
+#: A bounding box: [nx, ny, nz], or the CLI's "5x5x3" text.
+ShapeIn = Annotated[Shape, BeforeValidator(_shape_text)]
 Seed = Annotated[int, Field(ge=0, le=2**63 - 1, strict=True)]
 Number = Annotated[float, Field(strict=True)]
 
@@ -63,15 +72,20 @@ class RunCreate(RunSettings):  # type: ignore[misc, valid-type]
     """`{"preset": "paper-voxel", "seed": 1, "shape": [5, 5, 3], ...}`."""
 
     seed: Seed = 0
-    shape: Shape | None = Field(None, description="bounding box [nx, ny, nz] in voxels")
+    shape: ShapeIn | None = Field(
+        None, description='bounding box [nx, ny, nz] in voxels (or "5x5x3", as the CLI takes it)'
+    )
 
 
 class SweepCreate(RunSettings):  # type: ignore[misc, valid-type]
     """One base config over many bounding boxes and seeds (default: the paper's nine, seeds 1-3),
     or over task presets and seeds (`tasks`: each task's own box unless `shapes` is given)."""
 
-    shapes: list[Shape] = Field(
-        default_factory=lambda: list(PAPER_NINE_SHAPES), min_length=1, max_length=1000
+    shapes: list[ShapeIn] = Field(
+        default_factory=lambda: list(PAPER_NINE_SHAPES),
+        min_length=1,
+        max_length=1000,
+        description='bounding boxes, each [nx, ny, nz] (or "5x5x3")',
     )
     seeds: list[Seed] = Field(default_factory=lambda: [1, 2, 3], min_length=1, max_length=1000)
     tasks: list[Literal[tuple(TASKS)]] | None = Field(  # type: ignore[valid-type]
@@ -185,6 +199,13 @@ class SweepPublic(BaseModel):
     created_at: datetime
     request: dict[str, Any]
     boxes: list[SweepBox]
+
+
+class SweepPage(BaseModel):
+    items: list[SweepPublic]
+    total: int
+    offset: int
+    limit: int
 
 
 class Preset(BaseModel):

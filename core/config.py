@@ -32,6 +32,24 @@ class ConfigError(ValueError):
     """A run configuration that cannot run; the message names the field."""
 
 
+def parse_shape(value: Any) -> tuple[int, int, int]:
+    """A bounding box from [nx, ny, nz] or the CLI's "5x5x3"; a ValueError in the CLI's words."""
+    if isinstance(value, str):  # "5x5x3", as the CLI takes it
+        try:
+            value = [int(part) for part in value.lower().split("x")]
+        except ValueError:
+            raise ValueError(f"expected NXxNYxNZ like 5x5x3, got {value!r}") from None
+    if not isinstance(value, list | tuple) or len(value) != 3:
+        raise ValueError(f"expected three sides [nx, ny, nz], got {value!r}")
+    if not all(isinstance(v, int) and not isinstance(v, bool) for v in value):
+        raise ValueError(f"sides must be integers, got {value!r}")
+    if not all(1 <= v <= MAX_SIDE for v in value):
+        raise ValueError(f"each side must be between 1 and {MAX_SIDE}, got {list(value)}")
+    if math.prod(value) > MAX_VOXELS:
+        raise ValueError(f"{math.prod(value)} voxels, more than the limit of {MAX_VOXELS}")
+    return (value[0], value[1], value[2])
+
+
 class RunConfig(GAConfig):
     """Everything that defines a run: encoding, bounding box, seed, GA and simulation settings."""
 
@@ -48,20 +66,7 @@ class RunConfig(GAConfig):
     @field_validator("shape", mode="before")
     @classmethod
     def _shape(cls, value: Any) -> tuple[int, int, int]:
-        if isinstance(value, str):  # "5x5x3", as the CLI takes it
-            try:
-                value = [int(part) for part in value.lower().split("x")]
-            except ValueError:
-                raise ValueError(f"expected NXxNYxNZ like 5x5x3, got {value!r}") from None
-        if not isinstance(value, list | tuple) or len(value) != 3:
-            raise ValueError(f"expected three sides [nx, ny, nz], got {value!r}")
-        if not all(isinstance(v, int) and not isinstance(v, bool) for v in value):
-            raise ValueError(f"sides must be integers, got {value!r}")
-        if not all(1 <= v <= MAX_SIDE for v in value):
-            raise ValueError(f"each side must be between 1 and {MAX_SIDE}, got {list(value)}")
-        if math.prod(value) > MAX_VOXELS:
-            raise ValueError(f"{math.prod(value)} voxels, more than the limit of {MAX_VOXELS}")
-        return (value[0], value[1], value[2])
+        return parse_shape(value)
 
     @field_validator("cube_options", mode="before")
     @classmethod

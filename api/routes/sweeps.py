@@ -6,13 +6,13 @@ from __future__ import annotations
 import statistics
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Body, Path, Response, status
+from fastapi import APIRouter, Body, Path, Query, Response, status
 
 from softevo.api import store
 from softevo.api.db import Database
 from softevo.api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TokenDep
 from softevo.api.routes.runs import BAD_BODY
-from softevo.api.schemas import Message, SweepBox, SweepCreate, SweepPublic
+from softevo.api.schemas import Message, SweepBox, SweepCreate, SweepPage, SweepPublic
 from softevo.api.validation import RequestError, check_budget, run_config
 from softevo.core.status import RunStatus
 
@@ -28,7 +28,10 @@ def _status(statuses: list[str]) -> str:
 
 
 def sweep_public(db: Database, sweep_id: int) -> SweepPublic:
-    sweep, runs = store.get_sweep(db, sweep_id)
+    return _public(*store.get_sweep(db, sweep_id))
+
+
+def _public(sweep: dict[str, Any], runs: list[store.RunRecord]) -> SweepPublic:
     by_task = bool(sweep["request"].get("tasks"))
     boxes: dict[tuple[str | None, tuple[int, int, int]], list[store.RunRecord]] = {}
     for run in runs:
@@ -112,6 +115,19 @@ def create_sweep(
     coordinator.wake()
     response.headers["Location"] = f"/sweeps/{sweep_id}"
     return sweep_public(db, sweep_id)
+
+
+@router.get("")
+def list_sweeps(
+    db: DatabaseDep,
+    offset: Annotated[int, Query(ge=0, le=10**9)] = 0,
+    limit: Annotated[int, Query(ge=1, le=200)] = 50,
+) -> SweepPage:
+    """Newest first, each with its boxes (or tasks) and their runs, as GET /sweeps/{id}."""
+    sweeps, total = store.list_sweeps(db, offset, limit)
+    return SweepPage(
+        items=[_public(*one) for one in sweeps], total=total, offset=offset, limit=limit
+    )
 
 
 @router.get("/{sweep_id}", responses={404: {"model": Message}})

@@ -253,6 +253,17 @@ def get_sweep(db: Database, sweep_id: int) -> tuple[dict[str, Any], list[RunReco
         ]
 
 
+def list_sweeps(
+    db: Database, offset: int, limit: int
+) -> tuple[list[tuple[dict[str, Any], list[RunRecord]]], int]:
+    """Newest first: each sweep and its runs."""
+    with db.read() as session:
+        total = session.scalar(select(func.count(Sweep.id))) or 0
+        newest = select(Sweep.id).order_by(Sweep.id.desc())
+        ids = list(session.scalars(newest.offset(offset).limit(limit)))
+    return [get_sweep(db, sweep_id) for sweep_id in ids], total
+
+
 def progress_counts(db: Database, run_id: int) -> dict[str, int]:
     """Individuals by status (fitness saved so far, also of the generation in progress)."""
     with db.read() as session:

@@ -23,9 +23,7 @@ export async function api(path, options = {}) {
   const body = response.headers.get("content-type")?.includes("json") ? await response.json() : null;
   if (!response.ok) {
     const detail = body?.detail;
-    const text = Array.isArray(detail)
-      ? detail.map((d) => `${(d.loc || []).slice(1).join(".")}: ${d.msg}`).join("; ")
-      : detail || response.statusText;
+    const text = Array.isArray(detail) ? detail.map(problem).join("; ") : detail || response.statusText;
     if (response.status === 401 || response.status === 403) {
       tokenInput.classList.add("wanted");  // the server wants a token: point at the field
       tokenInput.focus();
@@ -35,6 +33,13 @@ export async function api(path, options = {}) {
   return body;
 }
 
+// One refused field in the CLI's words: "shape: expected three sides [nx, ny, nz], got [4, 4]",
+// not pydantic's "Value error, ..." nor the field twice when the server's message names it.
+function problem(d) {
+  const field = (d.loc || []).slice(1).join(".");
+  const msg = String(d.msg || "").replace(/^Value error, /, "");
+  return !field || msg.startsWith(`${field}: `) ? msg : `${field}: ${msg}`;
+}
 
 export const h = (tag, attrs = {}, ...children) => {
   const node = document.createElement(tag);
@@ -49,6 +54,18 @@ export const h = (tag, attrs = {}, ...children) => {
 };
 export const fmt = (value, digits = 4) => (value === null || value === undefined ? "–" : Number(value).toFixed(digits));
 export const box = (shape) => (shape ? shape.join("×") : "–");
+// seconds between two of the API's timestamps, as "2 min 05 s" or "3.4 s" (null when either is missing)
+export function duration(from, to) {
+  if (!from || !to) return null;
+  const utc = (t) => new Date(/(Z|[+-]\d\d:?\d\d)$/i.test(t) ? t : `${t}Z`);  // SQLite's have no zone
+  const exact = Math.max(0, (utc(to) - utc(from)) / 1000);
+  if (exact < 9.95) return `${exact.toFixed(1)} s`;
+  const s = Math.round(exact);
+  const [hours, minutes, seconds] = [Math.floor(s / 3600), Math.floor((s % 3600) / 60), s % 60];
+  const pad = (n) => String(n).padStart(2, "0");
+  if (hours) return `${hours} h ${pad(minutes)} min`;
+  return minutes ? `${minutes} min ${pad(seconds)} s` : `${seconds} s`;
+}
 export const status = (s) => h("span", { class: `status ${s}` }, s);
 export const progressBar = (done, total) =>
   h("span", {}, h("span", { class: "bar" }, h("i", { style: `width:${(100 * done) / Math.max(1, total)}%` })),
@@ -71,7 +88,12 @@ export function chart(id, title, options, data, parent) {
   const holder = h("div", { class: "panel", id }, h("h3", {}, title));
   parent.append(holder);
   const width = () => Math.max(300, holder.clientWidth - 26);
-  const plot = new uPlot({ width: width(), height: 260, ...options }, data, holder);
+  // the legend shows the latest values while the cursor is off the chart, not "--"
+  const hooks = { ...(options.hooks || {}), setCursor: [...(options.hooks?.setCursor || []), showLast] };
+  const plot = new uPlot({ width: width(), height: 260, ...options, hooks }, data, holder);
+  const setData = plot.setData.bind(plot);
+  plot.setData = (...args) => { setData(...args); showLast(plot); };
+  showLast(plot);
   // the grid reflows as panels are added and the window resizes: follow the panel's width
   const observer = new ResizeObserver(() => {
     if (Math.abs(plot.width - width()) > 1) plot.setSize({ width: width(), height: plot.height });
@@ -80,6 +102,14 @@ export function chart(id, title, options, data, parent) {
   onLeave(() => observer.disconnect());
   softevo.charts[id] = plot;
   return plot;
+}
+
+// the legend at the last point, unless the cursor is on the chart
+function showLast(plot) {
+  const last = plot.data[0].length - 1;
+  if (plot.cursor.idx === null || plot.cursor.idx === undefined || plot.cursor.left < 0) {
+    if (last >= 0 && plot.legend.idx !== last) plot.setLegend({ idx: last });
+  }
 }
 
 // What a run's fitness is (its config's objective; speed when absent), with its unit.

@@ -1,5 +1,5 @@
 // softevo dashboard: runs, one run live (curve, population, diversity, 3D replay), sweeps.
-// ES modules: api.js (what every view shares), runs.js, run.js, replay.js, sweep.js; uPlot
+// ES modules: api.js (what every view shares), runs.js, sweeps.js, run.js, replay.js, sweep.js; uPlot
 // (global) draws the charts, three.js the replay. Everything it shows
 // comes from the REST API of the server that serves it. `window.softevo` exposes the chart data
 // and the replay's state, so tests (and curious users) can read what is drawn.

@@ -45,11 +45,18 @@ export class Replay {
   }
 
   async load(url, label) {
-    const data = await api(`${url}?fps=30`);
+    const data = await this.fetch(url);
+    this.show(data, label(data));
+    return data;
+  }
+
+  // fetch and show apart: the run view draws a new best with the summary that names it
+  fetch(url) { return api(`${url}?fps=30`); }
+
+  show(data, label) {
     this.data = data;
     this.loaded = true;
-    this.build(label(data));
-    return data;
+    this.build(label);
   }
 
   build(label) {

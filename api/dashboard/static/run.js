@@ -1,5 +1,5 @@
 // One run, live: its curve, population dot plot, diversity and the 3D replay of the best robot.
-import { CURVE_SERIES, GENERATION_AXIS, api, box, chart, fmt, h, objective, onLeave, progressBar, softevo, status, terrainText, view } from "./api.js";
+import { CURVE_SERIES, GENERATION_AXIS, api, box, chart, duration, fmt, h, objective, onLeave, progressBar, softevo, status, terrainText, view } from "./api.js";
 import { ArchiveMap } from "./archive.js";
 import { Replay } from "./replay.js";
 import { cancelButton } from "./runs.js";
@@ -35,12 +35,16 @@ export async function runView(runId) {
       h("a", { href: `/runs/${runId}/figures/diversity.png` }, "diversity (PNG)"),
       run.sweep_id ? h("a", { href: `#/sweeps/${run.sweep_id}` }, `sweep ${run.sweep_id}`) : "")));
   const showSummary = () => {
+    softevo.run = run;  // what the summary shows, for tests and curious users
+    const finished = !["queued", "running"].includes(run.status);
+    const wall = duration(run.started_at, finished ? run.finished_at : new Date().toISOString());
     summaryText.replaceChildren(
       status(run.status), " ", progressBar(run.progress.generation, run.progress.generations),
       ` best ${fmt(run.progress.best_fitness)} ${fitness.unit}`,
       run.progress.best_generation !== null ? ` (generation ${run.progress.best_generation})` : "",
       `, ${run.progress.evaluations} simulations, ${run.progress.saved} from the cache`,
-      run.progress.eta_seconds ? `, about ${Math.round(run.progress.eta_seconds)} s left` : "");
+      run.progress.eta_seconds ? `, about ${Math.round(run.progress.eta_seconds)} s left` : "",
+      wall ? h("span", { id: "wall-time" }, `, ${finished ? "wall time" : "running for"} ${wall}`) : "");
     summaryError.textContent = run.error || "";
     summaryError.hidden = !run.error;
     cancel.hidden = !["queued", "running"].includes(run.status);
@@ -133,11 +137,18 @@ export async function runView(runId) {
       .catch((error) => replayPanel.append(h("p", { class: "error" }, error.message)));
   }) : null;
   if (archive) await archive.update();
+  // The best robot's replay, shown with the summary in one step: if a better robot was committed
+  // while the replay was fetched (the run is read again to know), the replay says so and the
+  // next update fetches the new one
   const showBest = async () => {
+    const data = await replay.fetch(`/runs/${runId}/best/replay`);
+    if (data.generation !== run.progress.best_generation) run = await api(`/runs/${runId}`);
     const label = ["completed", "failed", "cancelled"].includes(run.status) ? "the fastest robot" : "the fastest robot so far";
-    // named from the replay itself: a better robot may have been committed since `run` was read
-    const data = await replay.load(`/runs/${runId}/best/replay`, (d) => `${label} (generation ${d.generation})`);
+    const newer = run.progress.best_generation;
+    const behind = newer !== null && newer > data.generation ? `; a better one, of generation ${newer}, is loading` : "";
+    replay.show(data, `${label} (generation ${data.generation}${behind})`);
     replay.best = data.generation;
+    showSummary();
   };
   if (run.progress.best_fitness !== null) {
     await showBest();
@@ -158,13 +169,15 @@ export async function runView(runId) {
       diversityPlot.setData([curve.map((r) => r.generation), curve.map((r) => r.diversity)]);
       for (const [key, plot] of qdCharts) plot.setData(qdData(key));
       if (archive) await archive.update();
-      showSummary();
-      // follow the fastest robot as it changes, unless the user picked an individual
-      const stale = !replay.loaded || (replay.best !== null && replay.best !== run.progress.best_generation);
+      // follow the fastest robot as it changes, unless the user picked an individual; the
+      // summary's best changes with the replay's, never before it
+      const following = replay.best !== null;
+      const relabel = following && !["queued", "running"].includes(run.status) && replay.state.label.includes("so far");
+      const stale = !replay.loaded || relabel || (following && replay.best !== run.progress.best_generation);
       if (stale && run.progress.best_fitness !== null) {
         replayPanel.querySelector("p.muted")?.remove();
         await showBest();
-      }
+      } else showSummary();
     };
     // events come in bursts (a reconnect replays every generation): redraw at most twice a second
     let dirty = false, busy = false;
