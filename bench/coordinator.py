@@ -111,8 +111,9 @@ ALGORITHMS: dict[str, dict[str, Any]] = {
 
 def drive(
     found: dict[str, Any], url: str, generations: int, sim_seconds: float, algorithm: str = "ga"
-) -> tuple[float, float, int]:
-    """One run to completion: (CPU seconds of this process, wall seconds, individuals)."""
+) -> tuple[float, float, int, int]:
+    """One run to completion: (CPU seconds of this process, wall seconds, individuals, robots
+    simulated)."""
     database = found["db"].Database(url)
     database.upgrade()
     request = {"preset": "paper-voxel", "seed": 1, "generations": generations}
@@ -134,11 +135,12 @@ def drive(
         time.sleep(0.2)  # rarely (old trees): this process's CPU is what is measured
     cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
     coordinator.stop()
-    status = found["get_run"](database, run.id).status
+    record = found["get_run"](database, run.id)
+    status, simulated = record.status, getattr(record, "evaluations", 0)
     database.dispose()
     if status != "completed":
         raise SystemExit(f"run ended {status}")
-    return cpu, wall, config.population * generations
+    return cpu, wall, config.population * generations, simulated
 
 
 def measure_once(
@@ -173,7 +175,7 @@ def stage(tree: str) -> str:
 
 def run_once(
     label: str, path: str | None, database: str, args: argparse.Namespace, algorithm: str = "ga"
-) -> tuple[float, float, int]:
+) -> tuple[float, float, int, int]:
     """One run in a fresh interpreter (so neither tree's imports or caches help the other)."""
     command = [
         sys.executable, "-P", __file__, "--once", database, "--generations", str(args.generations),
@@ -186,8 +188,8 @@ def run_once(
     out = subprocess.run(command, env=env, capture_output=True, text=True, check=False)
     if out.returncode != 0:
         raise SystemExit(f"{label} on {database} failed:\n{out.stderr[-3000:]}")
-    cpu, wall, individuals = json.loads(out.stdout.strip().splitlines()[-1])
-    return cpu, wall, individuals
+    cpu, wall, individuals, simulated = json.loads(out.stdout.strip().splitlines()[-1])
+    return cpu, wall, individuals, simulated
 
 
 def main() -> None:
@@ -224,14 +226,14 @@ def main() -> None:
     )
     print("database  tree                CPU/individual  wall/generation  generations/s")
     for database in ("sqlite", "postgres"):
-        rows: dict[str, list[tuple[float, float, int]]] = {label: [] for label, _ in trees}
+        rows: dict[str, list[tuple[float, float, int, int]]] = {label: [] for label, _ in trees}
         for _ in range(args.repeats):
             for label, path in trees:
                 rows[label].append(run_once(label, path, database, args))
         cpu_of = {}
         for label, _ in trees:
-            cpu = statistics.median(c / n for c, _, n in rows[label]) * 1e3
-            wall = statistics.median(w / args.generations for _, w, _ in rows[label])
+            cpu = statistics.median(c / n for c, _, n, _ in rows[label]) * 1e3
+            wall = statistics.median(w / args.generations for _, w, _, _ in rows[label])
             cpu_of[label] = cpu
             print(f"{database:9} {label[-18:]:18} {cpu:11.3f} ms  {wall * 1e3:12.2f} ms  "
                   f"{1 / wall:12.1f}")  # fmt: skip
@@ -248,18 +250,23 @@ def compare_algorithms(args: argparse.Namespace, algorithms: list[str]) -> None:
         f"Python {platform.python_version()}, {args.generations} generations of 25, "
         f"{args.sim_seconds:g} s per robot, median of {args.repeats} (algorithms interleaved)"
     )
-    print("database  algorithm           CPU/individual  wall/generation  / first's CPU")
+    print("database  algorithm           CPU/individual  / first's  simulated  CPU/simulation"
+          "  / first's")  # fmt: skip
     for database in ("sqlite", "postgres"):
-        rows: dict[str, list[tuple[float, float, int]]] = {name: [] for name in algorithms}
+        rows: dict[str, list[tuple[float, float, int, int]]] = {name: [] for name in algorithms}
         for _ in range(args.repeats):
             for name in algorithms:
                 rows[name].append(run_once(name, None, database, args, name))
-        first = statistics.median(c / n for c, _, n in rows[algorithms[0]]) * 1e3
-        for name in algorithms:
-            cpu = statistics.median(c / n for c, _, n in rows[name]) * 1e3
-            wall = statistics.median(w / args.generations for _, w, _ in rows[name])
-            print(f"{database:9} {name:18} {cpu:11.3f} ms  {wall * 1e3:12.2f} ms  "
-                  f"{cpu / first:12.2f}")  # fmt: skip
+        per = {  # CPU per individual and per simulated robot (ms), simulations
+            name: (statistics.median(c / n for c, _, n, _ in rows[name]) * 1e3,
+                   statistics.median(c / max(1, e) for c, _, _, e in rows[name]) * 1e3,
+                   statistics.median(e for *_, e in rows[name]))
+            for name in algorithms
+        }  # fmt: skip
+        first = per[algorithms[0]]
+        for name, (cpu, per_sim, simulated) in per.items():
+            print(f"{database:9} {name:18} {cpu:11.3f} ms  {cpu / first[0]:8.2f}  {simulated:9.0f}"
+                  f"  {per_sim:11.3f} ms  {per_sim / first[1]:8.2f}")  # fmt: skip
 
 
 if __name__ == "__main__":
