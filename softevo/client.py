@@ -250,6 +250,11 @@ class Run:
         """The best robot's mass positions over time and its springs (simulated on request)."""
         return self.client.get(f"/runs/{self.id}/best/replay", fps=fps)
 
+    def archive(self, robots: bool = False) -> dict[str, Any]:
+        """A run with descriptors: its MAP-Elites archive (every filled cell, coverage,
+        QD-score; each elite's robot file with `robots`); APIError 404 for a run without."""
+        return self.client.get(f"/runs/{self.id}/archive", robots=str(robots).lower())
+
     def cancel(self) -> dict[str, Any]:
         """Stop the run now, keeping its results; APIError 409 if it has already stopped."""
         self.data = self.client.post(f"/runs/{self.id}/cancel")

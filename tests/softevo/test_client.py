@@ -59,6 +59,21 @@ def test_a_run_from_start_to_best_robot(client: Client, capsys: pytest.CaptureFi
     assert refused.value.status == 409 and str(run.id) in refused.value.message
 
 
+def test_a_map_elites_runs_archive(client: Client) -> None:
+    qd = {"algorithm": "map-elites", "descriptors": ["voxels", "actuated"], "bins": [3, 3]}
+    run = client.run(**TINY, **qd, seed=2, sim=TINY_SIM)
+    assert run.wait(timeout=120)["status"] == "completed"
+    archive = run.archive(robots=True)
+    assert archive["coverage"] == len(archive["cells"]) / 9 and archive["cells"]
+    assert all(cell["robot"]["format"] == "softevo.robot/1" for cell in archive["cells"])
+    assert run.curve()[-1]["qd_score"] == archive["qd_score"]
+    plain = client.run(**TINY, seed=2, sim=TINY_SIM)
+    plain.wait(timeout=120)
+    with pytest.raises(APIError) as refused:
+        plain.archive()
+    assert refused.value.status == 404 and "without descriptors" in refused.value.message
+
+
 def test_cancel_and_a_wait_that_times_out(client: Client) -> None:
     run = client.run(**{**TINY, "generations": 500}, sim=TINY_SIM)
     with pytest.raises(TimeoutError, match=f"run {run.id}"):
