@@ -67,7 +67,10 @@ def _cmd_export(args: argparse.Namespace) -> int:
     from softevo.core.export import ExportError, export_robot, format_from_path
     from softevo.core.robot_file import RobotFileError, load_robot
 
-    format = args.format or format_from_path(args.out)
+    named = format_from_path(args.out)
+    if args.format and named and args.format != named:
+        args.parser.error(f"--format {args.format} but --out {args.out!r} names {named}: say one")
+    format = args.format or named
     if format is None:
         args.parser.error(
             f"--format is needed: the suffix of {args.out!r} names no format ({', '.join(FORMATS)})"

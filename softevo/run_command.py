@@ -260,6 +260,10 @@ def run_command(args: argparse.Namespace) -> int:
     return 0
 
 
+def _value(fitness: float | None) -> str:
+    return "-" if fitness is None else f"{fitness:.4f}"  # every robot failed: no best
+
+
 def _print_summary(args: argparse.Namespace, result: Result, out: Path) -> None:
     config = result.config
     if args.json:
@@ -268,7 +272,8 @@ def _print_summary(args: argparse.Namespace, result: Result, out: Path) -> None:
         print(
             f"{config['generations']} generations of {config['population']} "
             f"({config['encoding']}, {'x'.join(map(str, config['shape']))}, "
-            f"seed {config['seed']}): best {result.best_fitness:.4f} m/s "
+            f"seed {config['seed']}): best {_value(result.best_fitness)} "
+            f"{OBJECTIVES[config['objective']][1]} "
             f"(generation {result.best_generation}), "
             f"{result.evaluations} simulations, {result.saved} saved by the cache, "
             f"{result.wall_seconds:.1f} s\nresults in {out}/",

@@ -90,7 +90,7 @@ def _reference(done: dict[tuple, Any], shape: tuple, seed: int) -> float:
 
 
 def _row(shape: tuple, variant: str, runs: list[tuple[dict, dict, float]]) -> dict[str, Any]:
-    best = [run["progress"]["best_fitness"] for run, _, _ in runs]
+    best = [run["progress"]["best_fitness"] or 0.0 for run, _, _ in runs]  # failed: no best
     near = [sum(c["fitness"] >= NEAR_BEST * ref for c in a["cells"]) for _, a, ref in runs]
     mean = statistics.fmean
     return {

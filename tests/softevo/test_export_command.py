@@ -33,7 +33,7 @@ def test_export_writes_the_cores_bytes(format: str, examples: Path, tmp_path: Pa
     assert done.stderr.strip() == f"{out}: {format}, {out.stat().st_size} bytes"
 
 
-def test_format_option_wins_over_the_suffix(examples: Path, tmp_path: Path) -> None:
+def test_format_option_names_a_suffix_that_names_none(examples: Path, tmp_path: Path) -> None:
     out = tmp_path / "robot.bin"
     done = softevo(
         "export", str(examples / "crawler_4x4x4.json"), "--format", "vxa", "--out", str(out)
@@ -41,15 +41,21 @@ def test_format_option_wins_over_the_suffix(examples: Path, tmp_path: Path) -> N
     assert done.returncode == 0, done.stderr
     root = ET.fromstring(out.read_bytes())
     assert root.tag == "VXA" and len(root.findall("./VXC/Structure/Data/Layer")) == 4
-    stl = tmp_path / "robot.glb"
-    assert (
-        softevo(
-            "export", str(examples / "paper_cube.json"), "--format", "stl", "--out", str(stl)
-        ).returncode
-        == 0
-    )
-    mesh = trimesh.load(io.BytesIO(stl.read_bytes()), file_type="stl")  # STL, despite .glb
+    stl = tmp_path / "robot.stl"
+    cube = str(examples / "paper_cube.json")
+    done = softevo("export", cube, "--format", "stl", "--out", str(stl))
+    assert done.returncode == 0, done.stderr
+    mesh = trimesh.load(io.BytesIO(stl.read_bytes()), file_type="stl")
     assert mesh.is_watertight and mesh.volume == pytest.approx(1.0)
+
+
+def test_a_format_that_contradicts_the_suffix_is_refused(examples: Path, tmp_path: Path) -> None:
+    """STL bytes in a .glb file would be the bug `plot` had: refused, nothing written."""
+    out = tmp_path / "robot.glb"
+    cube = str(examples / "paper_cube.json")
+    done = softevo("export", cube, "--format", "stl", "--out", str(out))
+    assert done.returncode == 2 and "--format stl but --out" in done.stderr and "glb" in done.stderr
+    assert not out.exists()
 
 
 def test_usage_errors_exit_2(examples: Path, tmp_path: Path) -> None:
