@@ -5,11 +5,14 @@ from __future__ import annotations
 
 import contextlib
 import os
+import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 from softevo.client import Client
 from softevo.local_service import ServiceError, start_service
+from softevo.reproduce.plan import FINAL
 
 
 @contextlib.contextmanager
@@ -41,3 +44,17 @@ def service(
         raise SystemExit(f"softevo reproduce: {error}") from None
     with local, Client(local.url) as client:
         yield client
+
+
+def wait_runs(client: Client, run_ids: list[int], what: str) -> list[dict[str, Any]]:
+    """Every run's final status, in order, saying `what: k/n runs done` as the count grows."""
+    last = -1
+    while True:
+        runs = [client.get_run(i).status() for i in run_ids]
+        done = sum(r["status"] in FINAL for r in runs)
+        if done != last:
+            print(f"  {what}: {done}/{len(runs)} runs done", flush=True)
+            last = done
+        if done == len(runs):
+            return runs
+        time.sleep(2)

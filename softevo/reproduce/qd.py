@@ -15,12 +15,11 @@ from __future__ import annotations
 
 import csv
 import statistics
-import time
 from pathlib import Path
 from typing import Any
 
 from softevo.client import Client
-from softevo.reproduce.plan import FINAL
+from softevo.reproduce.client import wait_runs
 from softevo.reproduce.tables import fmt
 
 QD: dict[str, Any] = {"descriptors": ["voxels", "actuated"], "bins": [8, 8]}
@@ -39,19 +38,6 @@ COLUMNS = [
 ]  # fmt: skip
 
 
-def _wait(client: Client, ids: list[int]) -> list[dict[str, Any]]:
-    last = -1
-    while True:
-        runs = [client.get_run(i).status() for i in ids]
-        done = sum(r["status"] in FINAL for r in runs)
-        if done != last:
-            print(f"  qd: {done}/{len(runs)} runs done", flush=True)
-            last = done
-        if done == len(runs):
-            return runs
-        time.sleep(2)
-
-
 def run_qd(client: Client, quick: bool) -> tuple[list[dict[str, Any]], dict[tuple, Any]]:
     """Every variant's runs, finished: rows per (box, variant), and each run's archive by
     (box, variant, seed)."""
@@ -63,7 +49,7 @@ def run_qd(client: Client, quick: bool) -> tuple[list[dict[str, Any]], dict[tupl
         common = {**base, "shape": list(shape), "seed": seed}
         submitted[(shape, "ga", seed)] = client.run(**common).id
         submitted[(shape, "voxel-phase", seed)] = client.run(**common, encoding="voxel-phase").id
-    done = dict(zip(submitted, _wait(client, list(submitted.values())), strict=True))
+    done = dict(zip(submitted, wait_runs(client, list(submitted.values()), "qd"), strict=True))
     elites: dict[tuple, int] = {}
     for shape, seed in keys:  # MAP-Elites gets that seed's GA budget, in generations of P
         ga = done[(shape, "ga", seed)]
@@ -73,7 +59,7 @@ def run_qd(client: Client, quick: bool) -> tuple[list[dict[str, Any]], dict[tupl
             **{**base, "shape": list(shape), "seed": seed, "algorithm": "map-elites",
                "generations": generations}
         ).id  # fmt: skip
-    done.update(zip(elites, _wait(client, list(elites.values())), strict=True))
+    done.update(zip(elites, wait_runs(client, list(elites.values()), "qd"), strict=True))
     archives = {key: client.get(f"/runs/{run['id']}/archive") for key, run in done.items()}
     rows = [
         _row(shape, variant, [(done[(shape, variant, s)], archives[(shape, variant, s)],

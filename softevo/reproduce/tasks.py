@@ -10,14 +10,13 @@ from __future__ import annotations
 
 import csv
 import statistics
-import time
 from pathlib import Path
 from typing import Any
 
 from softevo.client import Client
 from softevo.core.objectives import OBJECTIVES, objective_label
 from softevo.core.tasks import TASKS
-from softevo.reproduce.plan import FINAL
+from softevo.reproduce.client import wait_runs
 from softevo.reproduce.tables import fmt
 
 FULL_SUITE: dict[str, Any] = {"seeds": [1, 2, 3]}
@@ -32,25 +31,12 @@ COLUMNS = [
 ]  # fmt: skip
 
 
-def _wait(client: Client, run_ids: list[int]) -> list[dict[str, Any]]:
-    last = ""
-    while True:
-        runs = [client.get_run(i).status() for i in run_ids]
-        done = sum(r["status"] in FINAL for r in runs)
-        if f"{done}" != last:
-            print(f"  tasks: {done}/{len(runs)} runs done", flush=True)
-            last = f"{done}"
-        if done == len(runs):
-            return runs
-        time.sleep(2)
-
-
 def run_suite(client: Client, quick: bool) -> list[dict[str, Any]]:
     """Every task's GA runs and random-search runs, finished: one row per task."""
     suite = QUICK_SUITE if quick else FULL_SUITE
     sweep = client.sweep(**suite, tasks=list(TASKS)).data
     groups = {group["task"]: group["run_ids"] for group in sweep["boxes"]}
-    ga = {task: _wait(client, ids) for task, ids in groups.items()}
+    ga = {task: wait_runs(client, ids, "tasks") for task, ids in groups.items()}
     base = {key: value for key, value in suite.items() if key not in ("seeds", "shapes")}
     if "shapes" in suite:
         base["shape"] = suite["shapes"][0]
@@ -65,7 +51,7 @@ def run_suite(client: Client, quick: bool) -> list[dict[str, Any]]:
             }).id
             for run in runs
         ]  # fmt: skip
-    random = {task: _wait(client, ids) for task, ids in random_ids.items()}
+    random = {task: wait_runs(client, ids, "tasks") for task, ids in random_ids.items()}
     return [_row(task, ga[task], random[task]) for task in TASKS]
 
 
