@@ -9,9 +9,13 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import numpy as np
+
+from softevo.core.export import surface_faces
+from softevo.core.lattice import Lattice
 from softevo.core.limits import MAX_REPLAY_POSITIONS
 from softevo.core.nulls import to_null
-from softevo.core.robot import Robot, build_mechanics
+from softevo.core.robot import Robot, VoxelRobot, build_mechanics
 from softevo.core.robot_file import robot_to_json
 from softevo.core.terrain import mesh
 
@@ -55,8 +59,26 @@ def replay_frames(
         "fps": 1.0 / (every * robot.sim.dt),
         "robot": robot_to_json(robot),
         "terrain": terrain_view(robot.sim.terrain, frames),
+        **voxel_faces(robot, mechanics.lattice),
         **trajectory.to_json(),
     }
+
+
+def voxel_faces(robot: Robot, lattice: Lattice) -> dict[str, Any]:
+    """The robot's outer voxel faces as quads of mass indices, wound outward
+    (`softevo.core.export.surface_faces`), and each face's material: a viewer moves each quad's
+    corners with its masses and draws the voxels deforming. "filled" for robots whose springs
+    carry their own materials."""
+    nx, ny, nz = lattice.shape
+    filled = lattice.kept.reshape(nz, ny, nx).transpose(2, 1, 0)  # [x, y, z]
+    corners, owners = surface_faces(filled)
+    points = corners[..., 0] + (nx + 1) * (corners[..., 1] + (ny + 1) * corners[..., 2])
+    masses = np.searchsorted(lattice.points, points)
+    voxel = owners[:, 0] + nx * (owners[:, 1] + ny * owners[:, 2])
+    labels = robot.voxels if isinstance(robot, VoxelRobot) else ("filled",) * len(lattice.kept)
+    voxels = voxel.tolist()
+    return {"faces": masses.tolist(), "face_voxels": voxels,
+            "face_materials": [labels[v] for v in voxels]}  # fmt: skip
 
 
 #: What a replay reports of its simulation besides speed.

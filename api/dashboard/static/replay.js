@@ -2,6 +2,7 @@
 import * as THREE from "three";
 import { OrbitControls } from "three/addons/OrbitControls.js";
 import { api, fmt, h, softevo, terrainText } from "./api.js";
+import { voxelMesh } from "./voxels.js";
 
 const PASSIVE_SOFT = new THREE.Color("#9bc59d"), PASSIVE_HARD = new THREE.Color("#4a4f55");
 const IN_PHASE = new THREE.Color("#d1495b"), ANTI_PHASE = new THREE.Color("#2f6fb5");
@@ -77,14 +78,16 @@ export class Replay {
     const byHue = phases.size > 2;
     this.state.phaseColours = byHue ? "hue" : "two";
     const legend = h("div", { class: "muted" },
-      "springs:", h("span", { class: "legend-swatch", style: "background:#9bc59d" }), "soft",
+      "materials:", h("span", { class: "legend-swatch", style: "background:#9bc59d" }), "soft",
       h("span", { class: "legend-swatch", style: "background:#4a4f55" }), "hard",
       ...(byHue
         ? [h("span", { class: "legend-swatch", style: "background:linear-gradient(90deg,#e33,#ee3,#3e3,#3ee,#33e,#e3e,#e33)" }),
           `actuated, coloured by phase (hue: 0 → 2π; ${phases.size} phases)`]
         : [h("span", { class: "legend-swatch", style: "background:#d1495b" }), "actuated (sine)",
           h("span", { class: "legend-swatch", style: "background:#2f6fb5" }), "actuated (anti-phase)"]));
-    this.panel.replaceChildren(title, facts, holder, h("div", { class: "controls" }, play, slider, speed, clock), legend);
+    const springsBox = h("input", { type: "checkbox", id: "replay-springs" });
+    const springsLabel = h("label", { class: "muted" }, springsBox, " springs");
+    this.panel.replaceChildren(title, facts, holder, h("div", { class: "controls" }, play, slider, speed, clock, springsLabel), legend);
 
     const state = this.state;
     Object.assign(state, { frame: 0, frames: data.frames.length, time: 0, playing: true, label });
@@ -130,9 +133,18 @@ export class Replay {
     });
     geometry.setAttribute("position", new THREE.BufferAttribute(positions, 3));
     geometry.setAttribute("color", new THREE.BufferAttribute(colours, 3));
-    scene.add(new THREE.LineSegments(geometry, new THREE.LineBasicMaterial({ vertexColors: true })));
+    const lines = new THREE.LineSegments(geometry, new THREE.LineBasicMaterial({ vertexColors: true }));
     const dots = new THREE.InstancedMesh(new THREE.SphereGeometry(0.06, 8, 6), new THREE.MeshBasicMaterial({ color: "#1d232a" }), masses);
-    scene.add(dots);
+    // shaded voxels by default, the springs (and masses) as an option
+    const body = data.faces ? voxelMesh(data, byHue) : null;
+    const sun = new THREE.DirectionalLight(0xffffff, 1.6);
+    sun.position.set(-3, -5, 8);
+    scene.add(lines, dots, sun, ...(body ? [body.mesh] : []));
+    const showSprings = (on) => { lines.visible = dots.visible = on || !body; if (body) body.mesh.visible = !on; state.springs = on || !body; };
+    showSprings(!body);
+    state.voxels = body ? body.faces : 0;
+    springsBox.checked = !body;
+    springsBox.onchange = () => { showSprings(springsBox.checked); state.drawn = false; };
     const matrix = new THREE.Matrix4();
     let controls = null;
     if (renderer) {
@@ -154,6 +166,7 @@ export class Replay {
       geometry.attributes.position.needsUpdate = true;
       points.forEach((p, m) => { matrix.makeTranslation(p[0], p[1], p[2]); dots.setMatrixAt(m, matrix); });
       dots.instanceMatrix.needsUpdate = true;
+      body?.update(points);
       const c = centre(points);  // follow the robot: move camera and target with its centre
       if (controls) {
         const shift = new THREE.Vector3(c[0], c[1], 0).sub(new THREE.Vector3(controls.target.x, controls.target.y, 0));

@@ -142,6 +142,13 @@ def test_a_finished_run_its_charts_and_the_replay(
     )  # the replay's frame advances
     second = (page.evaluate("window.softevo.replay.frame"), page.evaluate(canvas))
     assert second[1] != first[1], "the canvas did not change while playing"
+    # shaded voxels by default (as many faces as the replay has), the springs as an option
+    replayed = server.get(f"/runs/{run_id}/best/replay", params={"fps": 30}).json()
+    assert page.evaluate("window.softevo.replay.voxels") == len(replayed["faces"]) > 0
+    assert page.evaluate("window.softevo.replay.springs") is False
+    page.click("#replay-springs")
+    assert page.evaluate("window.softevo.replay.springs") is True
+    page.click("#replay-springs")
     shot(page, "dashboard-run")
     # pause stops it; the slider moves it; the speed control sets the pace
     page.click("#replay-play")
@@ -156,7 +163,6 @@ def test_a_finished_run_its_charts_and_the_replay(
         f"(s) => {{ s.value = {target}; s.dispatchEvent(new Event('input')); }}",
     )
     page.wait_for_function(f"window.softevo.replay.frame === {target}", timeout=5000)
-    replayed = server.get(f"/runs/{run_id}/best/replay", params={"fps": 30}).json()
     assert page.text_content("#replay-clock") == f"{replayed['times'][target]:.2f} s"
     page.select_option("#replay-speed", "4")
     assert page.evaluate("window.softevo.replay.speed") == 4
