@@ -29,3 +29,6 @@ MAX_DESCRIPTORS = 3
 #: Most frames per simulated second and simulated seconds of one moving picture (GIF / MP4).
 MAX_PICTURE_FPS = 30.0
 MAX_PICTURE_SECONDS = 20.0
+#: The service's tighter bounds on a picture rendered on a GET (/runs/{id}/best/replay.gif).
+SERVICE_PICTURE_FPS = 15.0
+SERVICE_PICTURE_SECONDS = 6.0

@@ -189,6 +189,13 @@ def movie(robot: Robot, format: str, fps: float = FPS, seconds: float = SECONDS)
         return path.read_bytes()
 
 
+def movie_from_file(robot_file: dict[str, Any], format: str, fps: float, seconds: float) -> bytes:
+    """`movie` of a robot file: what the service's replay process is handed (plain JSON in)."""
+    from softevo.core.robot_file import parse_robot
+
+    return movie(parse_robot(robot_file), format, fps, seconds)
+
+
 def _frames(robot: Robot, fps: float, seconds: float) -> tuple[np.ndarray, np.ndarray]:
     """Times [N] and mass positions [N, M, 3] of the N = fps x seconds frames at i / fps."""
     from softevo.core.physics import simulate
@@ -216,5 +223,6 @@ __all__ = [
     "check",
     "ffmpeg_available",
     "movie",
+    "movie_from_file",
     "thumbnail_png",
 ]
