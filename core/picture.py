@@ -92,7 +92,8 @@ class _Scene:
             self.colours[actuated] = hsv_to_rgb(hsv)[actuated]
         self.axes, self.towards = _camera()
         span = float(np.ptp(self.mechanics.positions, axis=0).max()) or 1.0
-        self.half = 1.1 * span + robot.sim.edge_length  # half the view's width (m)
+        self.span = span
+        self.half = 1.1 * span + robot.sim.edge_length  # half the view's width (m): room to move
 
 
 def _draw(scene: _Scene, ax: Any, positions: np.ndarray, time: float | None) -> None:
@@ -158,6 +159,7 @@ def _figure(size: tuple[int, int]) -> Any:
 def thumbnail_png(robot: Robot, size: tuple[int, int] = THUMBNAIL_SIZE) -> bytes:
     """One shaded frame of the robot at rest (no simulation) as PNG bytes of `size` pixels."""
     scene = _Scene(robot)
+    scene.half = 0.8 * scene.span + 0.2 * robot.sim.edge_length  # it stays put: fill the frame
     figure, ax = _figure(size)
     _draw(scene, ax, scene.mechanics.positions, None)
     buffer = io.BytesIO()
