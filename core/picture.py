@@ -142,7 +142,10 @@ def _ground(scene: _Scene, centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     z = np.asarray(scene.robot.sim.terrain.surface(x, y), dtype=float) * np.ones_like(x)
     tiles = np.stack([x, y, z], axis=2) - centre  # [T, 4, 3]
     order = np.argsort((tiles @ scene.towards).mean(axis=1))
-    colours = np.array(_GROUND)[(i + j) % 2][order]
+    normals = np.cross(tiles[:, 2] - tiles[:, 0], tiles[:, 3] - tiles[:, 1])
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    shade = 0.55 + 0.45 * np.clip(normals @ _LIGHT, 0, 1) / max(float(_LIGHT[2]), 1e-9)
+    colours = np.clip(np.array(_GROUND)[(i + j) % 2] * shade[:, None], 0, 1)[order]
     return tiles[order] @ scene.axes.T, colours
 
 
