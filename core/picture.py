@@ -19,7 +19,12 @@ from typing import Any
 import numpy as np
 
 from softevo.core.export import COLOURS, surface_faces, voxel_grid
-from softevo.core.limits import MAX_PICTURE_FPS, MAX_PICTURE_SECONDS, MAX_REPLAY_POSITIONS
+from softevo.core.limits import (
+    MAX_PICTURE_FPS,
+    MAX_PICTURE_SECONDS,
+    MAX_REPLAY_POSITIONS,
+    MIN_PICTURE_FPS,
+)
 from softevo.core.robot import ACTUATED_LABELS, Robot, VoxelRobot, build_mechanics
 
 PICTURE_FORMATS = ("gif", "mp4")
@@ -44,11 +49,13 @@ class PictureError(ValueError):
 
 def check(fps: float, seconds: float) -> int:
     """The number of frames of `seconds` at `fps`, or PictureError saying which is out of range."""
-    if not (math.isfinite(fps) and 0 < fps <= MAX_PICTURE_FPS):
-        raise PictureError(f"fps must be > 0 and at most {MAX_PICTURE_FPS}, got {fps}")
+    if not (math.isfinite(fps) and MIN_PICTURE_FPS <= fps <= MAX_PICTURE_FPS):
+        raise PictureError(
+            f"fps must be between {MIN_PICTURE_FPS:g} and {MAX_PICTURE_FPS:g}, got {fps:g}"
+        )
     if not (math.isfinite(seconds) and 0 < seconds <= MAX_PICTURE_SECONDS):
         raise PictureError(
-            f"duration must be > 0 and at most {MAX_PICTURE_SECONDS} s, got {seconds}"
+            f"duration must be > 0 and at most {MAX_PICTURE_SECONDS:g} s, got {seconds:g}"
         )
     return max(1, round(fps * seconds))
 
@@ -212,7 +219,8 @@ def _frames(robot: Robot, fps: float, seconds: float) -> tuple[np.ndarray, np.nd
     mechanics = replace(build_mechanics(robot), sim=sim)
     if n_frames * mechanics.n_masses > MAX_REPLAY_POSITIONS:
         raise PictureError(f"{n_frames} frames of {mechanics.n_masses} masses is too many")
-    every = max(1, math.floor(1.0 / (fps * sim.dt)))
+    per_step = fps * sim.dt  # frames per step; one frame for the whole run when it is tiny
+    every = sim.n_steps if per_step * sim.n_steps <= 1 else max(1, math.floor(1.0 / per_step))
     _result, trajectory = simulate(mechanics, record_every=every)
     assert trajectory is not None
     wanted = np.arange(n_frames) / fps

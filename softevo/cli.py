@@ -136,7 +136,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
 
 
 def _add_replay(commands: Any) -> None:
-    from softevo.core.limits import MAX_PICTURE_FPS, MAX_PICTURE_SECONDS
+    from softevo.core.limits import MAX_PICTURE_FPS, MAX_PICTURE_SECONDS, MIN_PICTURE_FPS
 
     replay = commands.add_parser(
         "replay",
@@ -152,7 +152,7 @@ def _add_replay(commands: Any) -> None:
     replay.add_argument("--out", required=True, metavar="FILE.gif|FILE.mp4", help="file to write")
     replay.add_argument(
         "--fps", type=_positive_float, default=12.0,
-        help=f"frames per simulated second (12; at most {MAX_PICTURE_FPS:g})",
+        help=f"frames per simulated second (12; {MIN_PICTURE_FPS:g} to {MAX_PICTURE_FPS:g})",
     )  # fmt: skip
     replay.add_argument(
         "--duration", type=_positive_float, default=3.0, metavar="S",

@@ -20,7 +20,7 @@ from softevo.api.routes.runs import NOT_FOUND, RunId, best_robot
 from softevo.api.schemas import Message
 from softevo.core.config import RunConfig
 from softevo.core.genome import Genome
-from softevo.core.limits import SERVICE_PICTURE_FPS, SERVICE_PICTURE_SECONDS
+from softevo.core.limits import MIN_PICTURE_FPS, SERVICE_PICTURE_FPS, SERVICE_PICTURE_SECONDS
 from softevo.core.picture import FPS, MEDIA_TYPES, SECONDS
 
 router = APIRouter(prefix="/runs", tags=["runs"])
@@ -78,7 +78,8 @@ def get_figure(
 
 
 PictureFps = Annotated[
-    float, Query(gt=0, le=SERVICE_PICTURE_FPS, description="frames per simulated second")
+    float,
+    Query(ge=MIN_PICTURE_FPS, le=SERVICE_PICTURE_FPS, description="frames per simulated second"),
 ]
 PictureSeconds = Annotated[
     float, Query(gt=0, le=SERVICE_PICTURE_SECONDS, description="simulated seconds drawn")

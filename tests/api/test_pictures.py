@@ -13,7 +13,7 @@ from PIL import Image
 
 from softevo.api import pictures
 from softevo.core import picture
-from softevo.core.limits import SERVICE_PICTURE_FPS, SERVICE_PICTURE_SECONDS
+from softevo.core.limits import MIN_PICTURE_FPS, SERVICE_PICTURE_FPS, SERVICE_PICTURE_SECONDS
 from tests.api.test_api import start, wait_for
 
 
@@ -41,7 +41,7 @@ def test_best_as_gif_and_thumbnail(client: TestClient, finished: int) -> None:
 
 @pytest.mark.parametrize(
     ("params", "limit"),
-    [({"fps": SERVICE_PICTURE_FPS + 1}, SERVICE_PICTURE_FPS), ({"fps": 0}, 0),
+    [({"fps": SERVICE_PICTURE_FPS + 1}, SERVICE_PICTURE_FPS), ({"fps": 0.1}, MIN_PICTURE_FPS),
      ({"duration": SERVICE_PICTURE_SECONDS * 2}, SERVICE_PICTURE_SECONDS)],
 )  # fmt: skip
 def test_out_of_range_fps_or_duration_is_a_422(

@@ -83,10 +83,12 @@ def test_non_positive_fps_is_a_usage_error(examples: Path, tmp_path: Path) -> No
 
 def test_check_counts_frames_and_names_the_limit() -> None:
     assert picture.check(12, 3) == 36 and picture.check(0.5, 1) == 1
-    with pytest.raises(picture.PictureError, match=f"at most {picture.MAX_PICTURE_SECONDS}"):
+    with pytest.raises(picture.PictureError, match=f"at most {picture.MAX_PICTURE_SECONDS:g} s"):
         picture.check(10, picture.MAX_PICTURE_SECONDS * 2)
     with pytest.raises(picture.PictureError, match="fps"):
         picture.check(float("nan"), 1)
+    with pytest.raises(picture.PictureError, match=f"between {picture.MIN_PICTURE_FPS:g}"):
+        picture.check(1e-300, 1)
 
 
 def test_thumbnail_is_a_png_of_the_stated_size(examples: Path) -> None:
