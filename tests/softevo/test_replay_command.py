@@ -120,3 +120,9 @@ def test_mp4_without_ffmpeg_says_how_to_get_it(
     done = softevo("replay", str(examples / "crawler_4x4x4.json"), "--out", str(tmp_path / "a.mp4"))
     assert done.returncode == 1 and "install" in done.stderr and "ffmpeg" in done.stderr
     assert done.stderr.count("\n") == 1
+
+
+def test_help_names_the_formats_and_ffmpeg() -> None:
+    done = softevo("replay", "--help")
+    assert done.returncode == 0 and "ffmpeg" in done.stdout and ".gif" in done.stdout
+    assert "replay" in softevo("--help").stdout
