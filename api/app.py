@@ -22,7 +22,7 @@ from fastapi.responses import JSONResponse
 from sqlalchemy.exc import InterfaceError, OperationalError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
-from softevo.api import dashboard, replay, store
+from softevo.api import dashboard, pictures, replay, store
 from softevo.api.body_limit import BodyLimitMiddleware
 from softevo.api.coordinator import Coordinator
 from softevo.api.db import Database, alembic_config, current_revision
@@ -152,6 +152,10 @@ def _install_error_handlers(app: FastAPI) -> None:
     @app.exception_handler(replay.ReplayBusyError)
     async def no_replay(_request: Request, error: Exception) -> JSONResponse:
         return JSONResponse({"detail": str(error)}, status_code=503, headers={"Retry-After": "2"})
+
+    @app.exception_handler(pictures.PictureUnsupportedError)
+    async def unsupported(_request: Request, error: Exception) -> JSONResponse:
+        return JSONResponse({"detail": str(error)}, status_code=501)
 
     @app.exception_handler(RequestError)
     async def bad_request(_request: Request, error: RequestError) -> JSONResponse:

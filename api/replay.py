@@ -162,3 +162,19 @@ def shutdown() -> None:
         pool, _pool = _pool, None
     if pool is not None:
         pool.shutdown(wait=False, cancel_futures=True)
+
+
+def in_own_process(function: Callable[..., Any], *args: Any) -> Any:
+    """`function(*args)` in one of the replays' processes, counted against RUNNING_AT_ONCE like a
+    replay (one more is refused with ReplayBusyError, never queued on a request thread)."""
+    if not _slots.acquire(blocking=False):
+        raise ReplayBusyError(
+            f"{RUNNING_AT_ONCE} replays are being simulated; try again in a few seconds"
+        )
+    try:
+        return _processes().submit(function, *args).result()
+    except BrokenProcessPool:
+        shutdown()
+        raise ReplayUnavailableError("the replay's process died (out of memory?)") from None
+    finally:
+        _slots.release()

@@ -26,3 +26,10 @@ MAX_REPLAY_POSITIONS = 1_000_000
 #: Most cells of a quality-diversity archive (the product of its `bins`) and most descriptors.
 MAX_ARCHIVE_CELLS = 10_000
 MAX_DESCRIPTORS = 3
+#: Fewest and most frames per simulated second, most simulated seconds, of one moving picture.
+MIN_PICTURE_FPS = 0.5
+MAX_PICTURE_FPS = 30.0
+MAX_PICTURE_SECONDS = 20.0
+#: The service's tighter bounds on a picture rendered on a GET (/runs/{id}/best/replay.gif).
+SERVICE_PICTURE_FPS = 15.0
+SERVICE_PICTURE_SECONDS = 6.0

@@ -220,7 +220,7 @@ def get_individual(
     return IndividualDetail(**data, robot=robot_to_json(robot))
 
 
-def _best_robot(db: Database, run_id: int) -> Any:
+def best_robot(db: Database, run_id: int) -> Any:
     run = store.get_run(db, run_id)
     best = store.best_individual(db, run)
     if best is None:
@@ -235,7 +235,7 @@ def _best_robot(db: Database, run_id: int) -> Any:
 def get_best(run_id: RunId, db: DatabaseDep, format: FormatQuery = None) -> Any:
     """The fastest robot so far as a robot file (softevo.robot/1); with `format`, as that file
     (vxa, glb or stl: docs/export.md)."""
-    robot, _best = _best_robot(db, run_id)
+    robot, _best = best_robot(db, run_id)
     if format is not None:
         return file_response(robot, format, f"run-{run_id}-best")
     return robot_to_json(robot)
@@ -248,7 +248,7 @@ def get_replay(
     fps: Annotated[float, Query(ge=0.1, le=120)] = 30.0,
 ) -> Response:
     """Frames of mass positions (and the springs) of the best robot, for a 3D viewer."""
-    robot, best = _best_robot(db, run_id)
+    robot, best = best_robot(db, run_id)
     return replay_response(
         robot, fps, run_id=run_id, fitness=best["fitness"], generation=best["generation"]
     )

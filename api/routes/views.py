@@ -9,16 +9,19 @@ from __future__ import annotations
 
 import io
 import threading
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Path, Query, Response
 
-from softevo.api import store
+from softevo.api import pictures, store
 from softevo.api.deps import DatabaseDep
 from softevo.api.replay import replay_response
-from softevo.api.routes.runs import NOT_FOUND, RunId
+from softevo.api.routes.runs import NOT_FOUND, RunId, best_robot
+from softevo.api.schemas import Message
 from softevo.core.config import RunConfig
 from softevo.core.genome import Genome
+from softevo.core.limits import MIN_PICTURE_FPS, SERVICE_PICTURE_FPS, SERVICE_PICTURE_SECONDS
+from softevo.core.picture import FPS, MEDIA_TYPES, SECONDS
 
 router = APIRouter(prefix="/runs", tags=["runs"])
 
@@ -72,3 +75,53 @@ def get_figure(
             figure = figures.diversity_figure(rows, f"diversity: {title}")
         figures.write(figure, buffer)
     return Response(buffer.getvalue(), media_type="image/png")
+
+
+PictureFps = Annotated[
+    float,
+    Query(ge=MIN_PICTURE_FPS, le=SERVICE_PICTURE_FPS, description="frames per simulated second"),
+]
+PictureSeconds = Annotated[
+    float, Query(gt=0, le=SERVICE_PICTURE_SECONDS, description="simulated seconds drawn")
+]
+MOVIE_RESPONSES: dict[int | str, dict[str, Any]] = {
+    **NOT_FOUND,
+    501: {"model": Message, "description": "MP4 asked for and no ffmpeg on the server"},
+    503: {"model": Message, "description": "Too many pictures and replays being made at once"},
+}
+
+
+@router.get(
+    "/{run_id}/best/replay.{format}",
+    responses={
+        **MOVIE_RESPONSES,
+        200: {"content": {"image/gif": {}, "video/mp4": {}}, "description": "the movie"},
+    },
+    response_class=Response,
+)
+def get_best_movie(
+    run_id: RunId,
+    format: Literal["gif", "mp4"],
+    db: DatabaseDep,
+    fps: PictureFps = FPS,
+    duration: PictureSeconds = SECONDS,
+) -> Response:
+    """The best robot's simulation drawn as shaded voxels, the camera following it: a GIF, or an
+    MP4 where the server has ffmpeg (501 otherwise). Rendered on request, then remembered."""
+    robot, _best = best_robot(db, run_id)
+    return Response(pictures.movie(robot, format, fps, duration), media_type=MEDIA_TYPES[format])
+
+
+@router.get(
+    "/{run_id}/best/thumbnail.png",
+    responses={**NOT_FOUND, 200: {"content": {"image/png": {}}, "description": "the picture"}},
+    response_class=Response,
+)
+def get_best_thumbnail(run_id: RunId, db: DatabaseDep) -> Response:
+    """A small shaded picture of the best robot at rest (for the runs list), kept per best."""
+    robot, best = best_robot(db, run_id)
+    return Response(
+        pictures.thumbnail(run_id, best, robot),
+        media_type="image/png",
+        headers={"Cache-Control": "max-age=60"},
+    )

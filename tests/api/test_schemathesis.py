@@ -26,7 +26,12 @@ from pathlib import Path
 import pytest
 import schemathesis
 from hypothesis import HealthCheck, settings
-from schemathesis.checks import ignored_auth, missing_required_header, positive_data_acceptance
+from schemathesis.checks import (
+    ignored_auth,
+    missing_required_header,
+    not_a_server_error,
+    positive_data_acceptance,
+)
 from schemathesis.python import asgi
 
 from softevo.api.app import create_app
@@ -113,6 +118,9 @@ def test_api_conforms_to_its_schema(case: schemathesis.Case, api_token: str | No
         # (cube-springs needs shape 1x1x1, immigrants must leave room for children, ...), which
         # no static schema can state.
         excluded.append(positive_data_acceptance)
+    if case.operation.path == "/runs/{run_id}/best/replay.{format}":
+        # A valid request for an MP4 is a documented 501 on a server without ffmpeg (this one).
+        excluded += [positive_data_acceptance, not_a_server_error]
     if api_token:
         headers = {"Authorization": f"Bearer {api_token}"}
         response = case.call_and_validate(headers=headers, excluded_checks=excluded)

@@ -41,9 +41,10 @@ export async function runsView() {
   async function refresh() {
     const page = await api("/runs?limit=100");
     table.replaceChildren(
-      h("tr", {}, ["run", "status", "progress", "best fitness", "preset", "box", "seed", "sweep", ""].map((t) => h("th", {}, t))),
+      h("tr", {}, ["run", "", "status", "progress", "best fitness", "preset", "box", "seed", "sweep", ""].map((t) => h("th", {}, t))),
       ...page.items.map((run) => h("tr", { "data-run": run.id },
         h("td", {}, h("a", { href: `#/runs/${run.id}` }, `#${run.id}`)),
+        h("td", { class: "thumb" }, thumbnail(run)),
         h("td", {}, status(run.status)),
         h("td", {}, progressBar(run.progress.generation, run.progress.generations)),
         h("td", { class: "num" }, `${fmt(run.progress.best_fitness)} ${objective(run.config).unit}`),
@@ -52,11 +53,22 @@ export async function runsView() {
         h("td", { class: "num" }, run.seed),
         h("td", {}, run.sweep_id ? h("a", { href: `#/sweeps/${run.sweep_id}` }, `sweep ${run.sweep_id}`) : "–"),
         h("td", {}, ["queued", "running"].includes(run.status) ? cancelButton(run.id, refresh) : ""))));
-    if (!page.items.length) table.append(h("tr", {}, h("td", { colspan: 9, class: "muted" }, "No runs yet: start one above.")));
+    if (!page.items.length) table.append(h("tr", {}, h("td", { colspan: 10, class: "muted" }, "No runs yet: start one above.")));
   }
   await Promise.all([refresh(), sweeps.refresh()]);
   const timer = setInterval(() => Promise.all([refresh(), sweeps.refresh()]).catch(() => {}), 2000);
   onLeave(() => clearInterval(timer));
+}
+
+// A small picture of the run's best robot at rest; the URL names the best's generation, so a new
+// best is fetched and an unchanged one comes from the browser's cache on each refresh.
+function thumbnail(run) {
+  const generation = run.progress.best_generation;
+  if (generation === null || generation === undefined) return "";
+  return h("img", {
+    class: "thumbnail", src: `/runs/${run.id}/best/thumbnail.png?generation=${generation}`,
+    loading: "lazy", width: 60, height: 45, alt: `best robot of run ${run.id}`,
+  });
 }
 
 export function cancelButton(runId, after) {
