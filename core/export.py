@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from softevo.core.lattice import LatticeError, build_lattice
+from softevo.core.lattice import Lattice, LatticeError, build_lattice
 from softevo.core.robot import LABELS, Robot, VoxelRobot
 
 FORMATS = ("vxa", "glb", "stl")
@@ -83,6 +83,19 @@ def surface_faces(filled: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             corners.append(cells[:, None, :] + offsets[None, :, :])
             owners.append(cells)
     return np.concatenate(corners), np.concatenate(owners)
+
+
+def mass_faces(robot: Robot, lattice: Lattice) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The simulated body's outer faces as the masses at their corners, for drawings that
+    deform with the simulation (the replay, the movies): mass indices [F, 4] wound outward,
+    each face's voxel (flat index, x fastest) [F] and material label [F]."""
+    grid = voxel_grid(robot)
+    quads, owners = surface_faces(grid != "empty")
+    nx, ny, _ = robot.shape
+    points = quads[..., 0] + (nx + 1) * (quads[..., 1] + (ny + 1) * quads[..., 2])
+    voxels = owners[:, 0] + nx * (owners[:, 1] + ny * owners[:, 2])
+    labels = grid[owners[:, 0], owners[:, 1], owners[:, 2]].astype(str)
+    return np.searchsorted(lattice.points, points), voxels, labels
 
 
 def _triangles(quads: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from softevo.core.export import COLOURS, surface_faces, voxel_grid
+from softevo.core.export import COLOURS, mass_faces
 from softevo.core.limits import (
     MAX_PICTURE_FPS,
     MAX_PICTURE_SECONDS,
@@ -80,19 +80,13 @@ class _Scene:
     def __init__(self, robot: Robot) -> None:
         self.robot = robot
         self.mechanics = build_mechanics(robot)
-        grid = voxel_grid(robot)
-        quads, owners = surface_faces(grid != "empty")
-        nx, ny, _ = robot.shape
-        points = quads[..., 0] + (nx + 1) * (quads[..., 1] + (ny + 1) * quads[..., 2])
-        self.faces = np.searchsorted(self.mechanics.lattice.points, points)  # [F, 4] masses
-        labels = grid[owners[:, 0], owners[:, 1], owners[:, 2]]
+        self.faces, flat, labels = mass_faces(robot, self.mechanics.lattice)  # [F, 4] masses
         self.colours = np.array([COLOURS[str(label)] for label in labels], dtype=float) / 255
         if isinstance(robot, VoxelRobot) and robot.phases is not None:
             from matplotlib.colors import hsv_to_rgb
 
-            nxy = nx * ny
-            flat = owners[:, 0] + nx * owners[:, 1] + nxy * owners[:, 2]
             phase = np.asarray(robot.phases, dtype=float)[flat] + robot.actuation.c
+            phase = phase + np.where(labels == "neg_sine", math.pi, 0.0)  # its minus sign: pi
             hue = np.mod(phase, 2 * math.pi) / (2 * math.pi)
             hsv = np.stack([hue, np.full_like(hue, 0.55), np.full_like(hue, 0.85)], axis=1)
             actuated = np.isin(labels, ACTUATED_LABELS)

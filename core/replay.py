@@ -9,13 +9,11 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import numpy as np
-
-from softevo.core.export import surface_faces
+from softevo.core.export import mass_faces
 from softevo.core.lattice import Lattice
 from softevo.core.limits import MAX_REPLAY_POSITIONS
 from softevo.core.nulls import to_null
-from softevo.core.robot import Robot, VoxelRobot, build_mechanics
+from softevo.core.robot import Robot, build_mechanics
 from softevo.core.robot_file import robot_to_json
 from softevo.core.terrain import mesh
 
@@ -66,19 +64,11 @@ def replay_frames(
 
 def voxel_faces(robot: Robot, lattice: Lattice) -> dict[str, Any]:
     """The robot's outer voxel faces as quads of mass indices, wound outward
-    (`softevo.core.export.surface_faces`), and each face's material: a viewer moves each quad's
-    corners with its masses and draws the voxels deforming. "filled" for robots whose springs
-    carry their own materials."""
-    nx, ny, nz = lattice.shape
-    filled = lattice.kept.reshape(nz, ny, nx).transpose(2, 1, 0)  # [x, y, z]
-    corners, owners = surface_faces(filled)
-    points = corners[..., 0] + (nx + 1) * (corners[..., 1] + (ny + 1) * corners[..., 2])
-    masses = np.searchsorted(lattice.points, points)
-    voxel = owners[:, 0] + nx * (owners[:, 1] + ny * owners[:, 2])
-    labels = robot.voxels if isinstance(robot, VoxelRobot) else ("filled",) * len(lattice.kept)
-    voxels = voxel.tolist()
-    return {"faces": masses.tolist(), "face_voxels": voxels,
-            "face_materials": [labels[v] for v in voxels]}  # fmt: skip
+    (`softevo.core.export.mass_faces`), each face's voxel and material ("filled" for robots
+    whose springs carry their own): a viewer moves each quad's corners with its masses."""
+    faces, voxels, labels = mass_faces(robot, lattice)
+    return {"faces": faces.tolist(), "face_voxels": voxels.tolist(),
+            "face_materials": labels.tolist()}  # fmt: skip
 
 
 #: What a replay reports of its simulation besides speed.
