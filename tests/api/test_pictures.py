@@ -6,6 +6,7 @@ the limit, and an MP4 without ffmpeg is a 501 that says how to get it."""
 from __future__ import annotations
 
 import io
+import os
 
 import pytest
 from fastapi.testclient import TestClient
@@ -51,6 +52,16 @@ def test_out_of_range_fps_or_duration_is_a_422(
     assert response.status_code == 422
     (error,) = response.json()["detail"]
     assert error["loc"] == ["query", next(iter(params))] and f"{limit:g}" in error["msg"]
+
+
+def test_best_as_mp4_where_ffmpeg_is(client: TestClient, finished: int) -> None:
+    if not picture.ffmpeg_available():
+        if os.environ.get("CI") == "true":
+            pytest.fail("ffmpeg is needed under CI and is not installed (apt-get install ffmpeg)")
+        pytest.skip("ffmpeg is not installed (apt-get install ffmpeg)")
+    response = client.get(f"/runs/{finished}/best/replay.mp4", params={"fps": 4, "duration": 1})
+    assert response.status_code == 200, response.text
+    assert response.headers["content-type"] == "video/mp4" and response.content[4:8] == b"ftyp"
 
 
 def test_mp4_without_ffmpeg_is_a_501(
