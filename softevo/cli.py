@@ -63,6 +63,16 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0 if measures["stable"] else 1
 
 
+def _write_file(path: str, data: bytes, format: str) -> int:
+    """Write an exported or rendered file and say so on stderr (stdout stays free)."""
+    try:
+        Path(path).write_bytes(data)
+    except OSError as error:
+        raise CommandError(f"{path}: cannot write ({error.strerror})") from None
+    print(f"{path}: {format}, {len(data)} bytes", file=sys.stderr)
+    return 0
+
+
 def _cmd_export(args: argparse.Namespace) -> int:
     from softevo.core.export import ExportError, export_robot, format_from_path
     from softevo.core.robot_file import RobotFileError, load_robot
@@ -83,12 +93,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
         data = export_robot(robot, format)
     except ExportError as error:
         raise CommandError(f"{args.robot}: {error}") from None
-    try:
-        Path(args.out).write_bytes(data)
-    except OSError as error:
-        raise CommandError(f"{args.out}: cannot write ({error.strerror})") from None
-    print(f"{args.out}: {format}, {len(data)} bytes", file=sys.stderr)
-    return 0
+    return _write_file(args.out, data, format)
 
 
 def _add_export(commands: Any) -> None:
@@ -130,12 +135,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
         data = picture.movie(robot, format, args.fps, args.duration)
     except picture.PictureError as error:
         raise CommandError(f"{args.robot}: {error}") from None
-    try:
-        Path(args.out).write_bytes(data)
-    except OSError as error:
-        raise CommandError(f"{args.out}: cannot write ({error.strerror})") from None
-    print(f"{args.out}: {format}, {len(data)} bytes", file=sys.stderr)
-    return 0
+    return _write_file(args.out, data, format)
 
 
 def _add_replay(commands: Any) -> None:
