@@ -61,7 +61,7 @@ export function sweepsPanel(presets) {
           h("td", {}, h("a", { href: `#/sweeps/${sweep.id}` }, `sweep ${sweep.id}`)),
           h("td", {}, status(sweep.status)),
           h("td", {}, [...new Set(sweep.boxes.map((b) => (byTask ? b.task : box(b.shape))))].join(", ")),
-          h("td", { class: "num" }, (sweep.request.seeds || [1, 2, 3]).join(", ")),  // the API's default
+          h("td", { class: "num" }, (sweep.request.seeds || []).join(", ")),  // stored by the API
           h("td", { class: "num" }, `${done}/${runs}`),
           h("td", {}, sweep.request.preset || (byTask ? "each task's" : "paper-voxel")));
       }));

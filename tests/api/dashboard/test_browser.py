@@ -369,14 +369,21 @@ def test_a_map_elites_run_shows_its_archive_and_replays_a_picked_elite(
     shot(page, "dashboard-archive")
 
 
-def test_a_run_on_stairs_replays_over_the_terrain(page: Any, server: httpx.Client) -> None:
-    body = {**SMALL, "preset": "task-stairs", "shape": [3, 3, 3], "generations": 2}
+def open_finished_replay(page: Any, server: httpx.Client, body: dict[str, Any]) -> int:
+    """Start `body` as a run, wait until it completes, open its page until the replay is drawn."""
     run_id = server.post("/runs", json=body).json()["id"]
-    wait(lambda: server.get(f"/runs/{run_id}").json()["status"] == "completed", 60, "stairs run")
+    wait(lambda: server.get(f"/runs/{run_id}").json()["status"] == "completed", 60, "the run")
     page.goto(f"{page.base}/#/runs/{run_id}")
     page.wait_for_function(
         "window.softevo.replay && window.softevo.replay.frames > 0 && window.softevo.replay.drawn",
         timeout=30000,
+    )
+    return run_id
+
+
+def test_a_run_on_stairs_replays_over_the_terrain(page: Any, server: httpx.Client) -> None:
+    open_finished_replay(
+        page, server, {**SMALL, "preset": "task-stairs", "shape": [3, 3, 3], "generations": 2}
     )
     assert page.evaluate("window.softevo.replay.terrain") == "steps"
     assert "steps" in page.text_content("#task") and "forward" in page.text_content("#task")
@@ -386,14 +393,7 @@ def test_a_run_on_stairs_replays_over_the_terrain(page: Any, server: httpx.Clien
 
 
 def test_a_co_designed_robot_is_coloured_by_phase(page: Any, server: httpx.Client) -> None:
-    body = {**SMALL, "encoding": "voxel-phase", "generations": 2}
-    run_id = server.post("/runs", json=body).json()["id"]
-    wait(lambda: server.get(f"/runs/{run_id}").json()["status"] == "completed", 60, "co-design")
-    page.goto(f"{page.base}/#/runs/{run_id}")
-    page.wait_for_function(
-        "window.softevo.replay && window.softevo.replay.frames > 0 && window.softevo.replay.drawn",
-        timeout=30000,
-    )
+    open_finished_replay(page, server, {**SMALL, "encoding": "voxel-phase", "generations": 2})
     assert page.evaluate("window.softevo.replay.phaseColours") == "hue"
     assert "coloured by phase" in page.text_content("#replay")
     shot(page, "dashboard-voxel-phase")
