@@ -26,7 +26,7 @@ from typing import Any
 from sqlalchemy.exc import InterfaceError, InternalError, OperationalError
 
 from softevo.api import store
-from softevo.api.db import Database
+from softevo.api.db import Database, EncodedJSON
 from softevo.api.faults import Faults
 from softevo.api.store.driving import GenerationCommit, Landed, Lease, LeaseLostError
 from softevo.core.config import RunConfig
@@ -219,7 +219,7 @@ class RunDriver(Hooks):
 def members(individuals: list[Individual]) -> list[dict[str, Any]]:
     """Individuals as the store keeps them."""
     return [
-        {"genome": item.genome.to_json(), "genome_hash": item.genome.hash,
+        {"genome": EncodedJSON(item.genome.canonical), "genome_hash": item.genome.hash,
          "operator": item.operator, "parents": list(item.parents)}
         for item in individuals
     ]  # fmt: skip
@@ -356,8 +356,8 @@ class Coordinator:
             self.faults.clear()  # it took a write: the database is writable again
             driver = RunDriver(self.driving, run_id)
             thread = threading.Thread(target=driver.run, name=f"run-{run_id}", daemon=True)
-            with self._lock:
+            with self._lock:  # started under the lock: `join` never meets it unstarted
                 self._drivers[run_id] = (driver, thread)
-            thread.start()
+                thread.start()
             free -= 1
             log.info("run %s: driving (owner %s)", run_id, self.owner)

@@ -7,6 +7,7 @@ instead of failing half-way with "database is locked". PostgreSQL needs none of 
 
 from __future__ import annotations
 
+import json
 import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -32,8 +33,18 @@ def normalise_url(url: str) -> str:
     return url
 
 
+class EncodedJSON(str):
+    """A JSON column's value already encoded (a genome's canonical text): written as it is,
+    not encoded a second time."""
+
+
+def _dumps(value: Any) -> str:
+    return value if isinstance(value, EncodedJSON) else json.dumps(value)
+
+
 def make_engine(url: str, **kwargs: Any) -> Engine:
     url = normalise_url(url)
+    kwargs.setdefault("json_serializer", _dumps)
     if make_url(url).get_backend_name() != "sqlite":
         return create_engine(url, pool_pre_ping=True, **kwargs)
     engine = create_engine(

@@ -95,6 +95,12 @@ def batch_digest(robot_files: Sequence[dict[str, Any]]) -> str:
     return hashlib.sha256(canonical.encode()).hexdigest()[:16]
 
 
+#: The threads that hand batches to evaluators, shared by every step of the process: started
+#: when first needed and kept, so a generation does not start its few threads afresh (each call
+#: still keeps at most its own number of batches handed over at once).
+_HANDS = ThreadPoolExecutor(max_workers=256, thread_name_prefix="batch")
+
+
 def evaluate_in_batches(
     evaluator: Evaluator,
     robot_files: Sequence[dict[str, Any]],
@@ -115,27 +121,35 @@ def evaluate_in_batches(
     if not files:
         return fitness
     capacity = evaluator.capacity()
-    batches = split_evenly(range(len(files)), batch_size, capacity)
+    waiting = split_evenly(range(len(files)), batch_size, capacity)
     # at most two batches per worker handed over at once: enough to keep every worker busy, and
     # when `check` stops the step (a cancel) the batches not yet handed over are dropped
-    threads = max(1, min(len(batches), in_flight, 2 * capacity))
-    executor = ThreadPoolExecutor(threads, thread_name_prefix="batch")
-    try:
-        futures: dict[Future[BatchResult], list[int]] = {}
-        for batch in batches:
+    threads = max(1, min(len(waiting), in_flight, 2 * capacity))
+    waiting.reverse()  # handed over in order, from the end of the list
+    out: dict[Future[BatchResult], list[int]] = {}
+
+    def hand_over() -> None:
+        while waiting and len(out) < threads:
+            batch = waiting.pop()
             chunk = [files[i] for i in batch]
-            batch_key = f"{key}-{batch_digest(chunk)}"
-            futures[executor.submit(evaluator.evaluate_batch, chunk, batch_key)] = batch
-        pending = set(futures)
-        while pending:
+            out[_HANDS.submit(evaluator.evaluate_batch, chunk, f"{key}-{batch_digest(chunk)}")] = (
+                batch
+            )
+
+    try:
+        hand_over()
+        while out:
             if check is not None:
                 check()
-            done, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
-            for future in done:
-                batch, result = futures[future], future.result()
+            done, _ = wait(out, timeout=0.2, return_when=FIRST_COMPLETED)
+            landed = [(out.pop(future), future) for future in done]
+            hand_over()  # the next batches first: `on_batch` may write to a database
+            for batch, future in landed:
+                result = future.result()
                 if on_batch is not None:
                     on_batch(batch, result)
                 fitness[batch] = np.asarray(result.fitness, dtype=np.float64)
     finally:
-        executor.shutdown(wait=False, cancel_futures=True)
+        for future in out:
+            future.cancel()  # not started yet (the shared threads were all busy): never will be
     return fitness

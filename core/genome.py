@@ -35,11 +35,16 @@ class Genome:
         )
 
     @cached_property
-    def hash(self) -> str:
-        """Stable across processes and machines: sha256 of the canonical JSON, 16 hex digits
-        (computed once per genome: the genome is frozen).
+    def canonical(self) -> str:
+        """The genome as canonical JSON (sorted keys, no spaces), computed once: what its hash
+        digests, and the text the service stores for it.
 
         Real genes enter as their shortest round-trip repr, so equal floats hash equally.
         """
-        canonical = json.dumps(self.to_json(), separators=(",", ":"), sort_keys=True)
-        return hashlib.sha256(canonical.encode()).hexdigest()[:16]
+        return json.dumps(self.to_json(), separators=(",", ":"), sort_keys=True)
+
+    @cached_property
+    def hash(self) -> str:
+        """Stable across processes and machines: sha256 of the canonical JSON, 16 hex digits
+        (computed once per genome: the genome is frozen)."""
+        return hashlib.sha256(self.canonical.encode()).hexdigest()[:16]

@@ -17,6 +17,7 @@ from softevo.api.db import Database
 from softevo.api.models import Generation, Individual, Run
 from softevo.api.store import leases
 from softevo.api.store.runs import now
+from softevo.api.store.statements import DriverStatement
 from softevo.core.nulls import from_null, to_null
 from softevo.core.status import IndividualStatus, RunStatus
 
@@ -95,7 +96,7 @@ def keep_generation(
         return {row.index: from_null(row.fitness) for row in rows if row.status in done}
 
 
-_SET_FITNESS = (
+_SET_FITNESS = DriverStatement(
     update(INDIVIDUALS)
     .where(
         INDIVIDUALS.c.run_id == bindparam("b_run"),
@@ -166,17 +167,29 @@ def save_fitness(
         _fence(connection, run_id, lease)
         rows = _fitness_rows(run_id, generation, landed)
         if rows:
-            connection.execute(_SET_FITNESS, rows)
+            _SET_FITNESS.execute(connection, rows)
+
+
+MEMBER_COLUMNS = ("genome", "genome_hash", "operator", "parents")
+_INSERT_MEMBER = DriverStatement(
+    insert(INDIVIDUALS)
+    .inline()
+    .values(
+        run_id=bindparam("b_run"), generation=bindparam("b_generation"),
+        index=bindparam("b_index"), status=IndividualStatus.PENDING.value,
+        **{column: bindparam(f"b_{column}") for column in MEMBER_COLUMNS},
+    )
+)  # fmt: skip
 
 
 def _insert_members(
     connection: Connection, run_id: int, generation: int, members: Sequence[dict[str, Any]]
 ) -> None:
-    connection.execute(
-        insert(INDIVIDUALS),
+    _INSERT_MEMBER.execute(
+        connection,
         [
-            {**member, "run_id": run_id, "generation": generation, "index": index,
-             "status": IndividualStatus.PENDING.value}
+            {"b_run": run_id, "b_generation": generation, "b_index": index,
+             **{f"b_{column}": member[column] for column in MEMBER_COLUMNS}}
             for index, member in enumerate(members)
         ],
     )  # fmt: skip
@@ -185,7 +198,7 @@ def _insert_members(
 # The run's row after a generation, precompiled (bound parameters, not literal values: the GA
 # state is a large JSON value that would otherwise be walked for the statement's cache key).
 # The best is the GA state's best so far, so writing it every time never lowers it.
-_ADVANCE = (
+_ADVANCE_STATEMENT = (
     update(RUNS)
     .where(RUNS.c.id == bindparam("b_run"))
     .values(
@@ -198,9 +211,21 @@ _ADVANCE = (
         best_generation=bindparam("b_best_generation"),
     )
 )
-_FINISH = _ADVANCE.values(
-    status=RunStatus.COMPLETED.value, finished_at=bindparam("b_at"), lease_owner=None,
-    lease_expires=None,
+_ADVANCE = DriverStatement(_ADVANCE_STATEMENT)
+_FINISH = DriverStatement(
+    _ADVANCE_STATEMENT.values(
+        status=RunStatus.COMPLETED.value, finished_at=bindparam("b_at"), lease_owner=None,
+        lease_expires=None,
+    )
+)  # fmt: skip
+_INSERT_GENERATION = DriverStatement(
+    insert(GENERATIONS)
+    .inline()
+    .values(
+        run_id=bindparam("b_run"), coverage=bindparam("b_coverage"),
+        qd_score=bindparam("b_qd_score"), seconds=bindparam("b_seconds"),
+        committed_at=bindparam("b_at"), **{key: bindparam(f"b_{key}") for key in CURVE_FIELDS},
+    )
 )  # fmt: skip
 
 
@@ -216,20 +241,28 @@ def commit_generation(db: Database, run_id: int, lease: Lease, commit: Generatio
         cached = [Landed(commit.cached, None, None)]
         rows += _fitness_rows(run_id, generation, cached, IndividualStatus.CACHED)
         if rows:
-            connection.execute(_SET_FITNESS, rows)
-        connection.execute(
-            insert(GENERATIONS),
-            {"run_id": run_id, **{key: stats[key] for key in CURVE_FIELDS},
-             "coverage": stats.get("coverage"), "qd_score": stats.get("qd_score"),
-             "seconds": commit.seconds, "committed_at": now()},
+            _SET_FITNESS.execute(connection, rows)
+        at = now()
+        _INSERT_GENERATION.execute(
+            connection,
+            [{"b_run": run_id, **{f"b_{key}": stats[key] for key in CURVE_FIELDS},
+              "b_coverage": stats.get("coverage"), "b_qd_score": stats.get("qd_score"),
+              "b_seconds": commit.seconds, "b_at": at}],
         )  # fmt: skip
-        connection.execute(
-            _FINISH if commit.done else _ADVANCE,
-            {"b_run": run_id, "b_state": commit.state, "b_done": generation + 1,
-             "b_evaluations": stats["evaluations"], "b_saved": stats["saved"],
-             "b_seconds": commit.seconds, "b_at": now(), "b_best": best[0],
-             "b_best_generation": best[1]},
-        )  # fmt: skip
+        advance = {
+            "b_run": run_id,
+            "b_state": commit.state,
+            "b_done": generation + 1,
+            "b_evaluations": stats["evaluations"],
+            "b_saved": stats["saved"],
+            "b_seconds": commit.seconds,
+            "b_best": best[0],
+            "b_best_generation": best[1],
+        }
+        if commit.done:
+            _FINISH.execute(connection, [{**advance, "b_at": at}])
+        else:
+            _ADVANCE.execute(connection, [advance])  # fmt: skip
         if not commit.done and commit.upcoming:
             _insert_members(connection, run_id, generation + 1, commit.upcoming)
 

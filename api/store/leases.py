@@ -16,6 +16,7 @@ from sqlalchemy import Connection, bindparam, case, or_, select, update
 from softevo.api.db import Database
 from softevo.api.models import Run
 from softevo.api.store.runs import now
+from softevo.api.store.statements import DriverStatement
 from softevo.core.status import RunStatus
 
 
@@ -61,7 +62,7 @@ def acquire(db: Database, run_id: int, owner: str, seconds: float, at: float | N
         return result.rowcount == 1
 
 
-_RENEW = (
+_RENEW = DriverStatement(
     update(Run.__table__)
     .where(
         Run.__table__.c.id == bindparam("b_run"),
@@ -76,7 +77,7 @@ def owns(connection: Connection, run_id: int, owner: str, seconds: float) -> boo
     """Renew the lease inside `connection`'s transaction; False if this owner lost the run. (One
     precompiled Core statement: it runs before every write a driver makes.)"""
     params = {"b_run": run_id, "b_owner": owner, "b_expires": time.time() + seconds}
-    return connection.execute(_RENEW, params).rowcount == 1
+    return _RENEW.execute(connection, [params]) == 1
 
 
 def renew(db: Database, run_id: int, owner: str, seconds: float) -> bool:
