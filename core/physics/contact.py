@@ -61,18 +61,27 @@ def _rough_steepness(tp):
 
 @njit(inline="always", **JIT)
 def _rough_gather(tp, steepest, wavenumber, x, y, z, step_factor, contact, near):
-    """Gather into `near` the points whose contact must be computed: those that move, are below
-    the field's reach and are not provably above the field. A point whose field height h0 was
-    computed at (x0, y0) keeps `bound` = h0 + margin; the field is `steepest`-Lipschitz, so at
-    (x, y) it is below bound + steepest (|x - x0| + |y - y0|): a point at least that high is
-    out of contact, which is what the full sum would say (depth 0, normal e_z), bit for bit."""
+    """Clear every point's contact and gather into `near` (returning how many) the points whose
+    contact must be computed: those that move, are below the field's reach and are not provably
+    above the field. A point whose field height h0 was computed at (x0, y0) keeps `bound` = h0 +
+    margin; the field is `steepest`-Lipschitz, so at (x, y) it is below bound + steepest (|x -
+    x0| + |y - y0|): a point at least that high is out of contact, which is what the full sum
+    would say (depth 0, normal e_z), bit for bit."""
+    depth, nx, ny, nz = contact[0], contact[1], contact[2], contact[3]
     bound, x0, y0 = contact[9], contact[10], contact[11]
-    count = 0
-    for m in range(x.shape[0]):  # without a branch: each point is written, kept if it is near
-        near[count] = m
+    for m in range(x.shape[0]):  # vectorises: near[m] = 1 where point m is to be evaluated
+        depth[m] = 0.0
+        nx[m] = 0.0
+        ny[m] = 0.0
+        nz[m] = 1.0
         cone = bound[m] + steepest * (abs(x[m] - x0[m]) + abs(y[m] - y0[m]))
         held = (z[m] >= cone) & (wavenumber * (abs(x[m]) + abs(y[m])) < BOUND_ANGLES)
-        count += (z[m] < tp[0]) & (step_factor[m] > 0.0) & (not held)  # (never moves: 0)
+        near[m] = (z[m] < tp[0]) & (step_factor[m] > 0.0) & (not held)  # (never moves: 0)
+    count = 0
+    for m in range(x.shape[0]):  # in place, without a branch: near[m] is read, then near[count]
+        keep = near[m]  # (count <= m) is written
+        near[count] = m
+        count += keep
     return count
 
 
@@ -84,11 +93,6 @@ def _rough_pass(tp, x, y, z, step_factor, contact, near):
     depth, nx, ny, nz = contact[0], contact[1], contact[2], contact[3]
     px, py, h, hx, hy = contact[4], contact[5], contact[6], contact[7], contact[8]
     bound, x0, y0 = contact[9], contact[10], contact[11]
-    for m in range(x.shape[0]):
-        depth[m] = 0.0
-        nx[m] = 0.0
-        ny[m] = 0.0
-        nz[m] = 1.0
     steepest, wavenumber = _rough_steepness(tp)
     count = _rough_gather(tp, steepest, wavenumber, x, y, z, step_factor, contact, near)
     for c in range(count):
