@@ -78,8 +78,8 @@ def _rough_gather(tp, steepest, wavenumber, x, y, z, step_factor, contact, near)
         held = (z[m] >= cone) & (wavenumber * (abs(x[m]) + abs(y[m])) < BOUND_ANGLES)
         near[m] = (z[m] < tp[0]) & (step_factor[m] > 0.0) & (not held)  # (never moves: 0)
     count = 0
-    for m in range(x.shape[0]):  # in place, without a branch: near[m] is read, then near[count]
-        keep = near[m]  # (count <= m) is written
+    for m in range(x.shape[0]):  # in place, without a branch: near[m] is read before
+        keep = near[m]  # near[count] (count <= m) is written
         near[count] = m
         count += keep
     return count
