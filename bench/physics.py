@@ -9,6 +9,9 @@ dt = 0.0005), through:
   and in total, and on one thread for several lane counts;
 * a plain vectorised NumPy implementation of the same physics, written below (one NumPy pass per
   step over all springs, `np.bincount` to sum forces), for 1 robot and for 32 robots at once;
+* `simulate_batch` on each task preset's terrain against flat in the same run (`terrain_rates`),
+  for 32 such blocks (the target: every terrain >= 80 % of flat) and for 32 random actuated
+  robots of the same springs, whose masses move;
 
 then the speed-ups, and the first-call time (the JIT compile) in a fresh process with an empty
 numba cache against a second fresh process that reuses that cache. Timings pass prebuilt
@@ -36,7 +39,7 @@ import numba
 import numpy as np
 
 from softevo.core.physics import kernels, simulate, simulate_batch
-from softevo.core.robot import Mechanics, VoxelRobot, build_mechanics
+from softevo.core.robot import Actuation, Mechanics, VoxelRobot, build_mechanics
 from softevo.core.settings import SimSettings
 from softevo.core.tasks import TASKS
 
@@ -55,30 +58,55 @@ def cpu_model() -> str:
     return platform.machine()
 
 
-def solid_block(duration: float, terrain: dict | None = None) -> Mechanics:
-    sim = SimSettings.model_validate(
+def bench_sim(duration: float, terrain: dict | None = None) -> SimSettings:
+    return SimSettings.model_validate(
         {"duration": duration, "settle_time": min(1.0, duration / 2),
          **({"terrain": terrain} if terrain else {})}
     )  # fmt: skip
-    return build_mechanics(VoxelRobot((4, 4, 4), ("hard",) * 64, sim=sim))
 
 
-def terrain_rates(duration: float, repeats: int, n_batch: int) -> dict[str, float]:
-    """Spring updates per second of `n_batch` blocks on each task's terrain, 1 thread, the
-    terrains interleaved round by round so a drifting machine hits them alike."""
-    blocks = {"flat": solid_block(duration)}
+def solid_block(duration: float, terrain: dict | None = None) -> Mechanics:
+    return build_mechanics(VoxelRobot((4, 4, 4), ("hard",) * 64, sim=bench_sim(duration, terrain)))
+
+
+def random_robots(duration: float, terrain: dict | None, count: int) -> list[Mechanics]:
+    """`count` random actuated 4x4x4 robots with no empty voxel (the block's 1036 springs each,
+    the same robots on every terrain), so contact is also timed on masses that move."""
+    rng = np.random.default_rng(5)
+    sim = bench_sim(duration, terrain)
+    labels = [
+        tuple(rng.choice(["hard", "soft", "sine", "neg_sine"], 64).tolist()) for _ in range(count)
+    ]
+    return [build_mechanics(VoxelRobot((4, 4, 4), voxels, Actuation(0.0, 1.0, 0.0), sim))
+            for voxels in labels]  # fmt: skip
+
+
+def terrain_rates(
+    duration: float, repeats: int, n_batch: int, actuated: bool = False
+) -> dict[str, float]:
+    """Spring updates per second of `n_batch` blocks (or, `actuated`, random actuated robots) on
+    each task's terrain, 1 thread, the terrains interleaved round by round so a drifting
+    machine hits them alike."""
+
+    def robots(terrain: dict | None) -> list[Mechanics]:
+        if actuated:
+            return random_robots(duration, terrain, n_batch)
+        return [solid_block(duration, terrain)] * n_batch
+
+    batches = {"flat": robots(None)}
     for name, (_, terrain, _) in TASKS.items():
         if terrain["kind"] != "flat":
-            blocks[name.removeprefix("task-")] = solid_block(duration, terrain)
-    times: dict[str, list[float]] = {name: [] for name in blocks}
-    for block in blocks.values():
-        simulate_batch([block] * 2)  # compiled, and every terrain's path warm
+            batches[name.removeprefix("task-")] = robots(terrain)
+    times: dict[str, list[float]] = {name: [] for name in batches}
+    for batch in batches.values():
+        simulate_batch(batch[:2])  # compiled, and every terrain's path warm
     for _ in range(repeats):
-        for name, block in blocks.items():
+        for name, batch in batches.items():
             started = time.perf_counter()
-            simulate_batch([block] * n_batch)
+            simulate_batch(batch)
             times[name].append(time.perf_counter() - started)
-    updates = blocks["flat"].n_springs * blocks["flat"].sim.n_steps * n_batch
+    first = batches["flat"][0]
+    updates = first.n_springs * first.sim.n_steps * n_batch
     return {name: updates / statistics.median(t) for name, t in times.items()}
 
 
@@ -236,11 +264,14 @@ def main() -> None:
             rate_row(f"lanes = {lanes}", one_step * n_batch, seconds, 1)
 
     terrains = terrain_rates(duration, repeats, n_batch)
-    print(f"\n  simulate_batch, {n_batch} blocks, 1 thread, on each task's terrain "
+    moving = terrain_rates(duration, repeats, n_batch, actuated=True)
+    print(f"\n  simulate_batch, {n_batch} robots, 1 thread, on each task's terrain "
           "(interleaved)")  # fmt: skip
-    print(f"  {'terrain':<44}{'M/s':>12}{'/ flat':>12}")
+    print(f"  {'terrain':<20}{'blocks M/s':>12}{'/ flat':>8}{'random actuated M/s':>24}"
+          f"{'/ flat':>8}")  # fmt: skip
     for name, rate in terrains.items():
-        print(f"  {name:<44}{rate / 1e6:>12.0f}{rate / terrains['flat']:>12.2f}")
+        print(f"  {name:<20}{rate / 1e6:>12.0f}{rate / terrains['flat']:>8.2f}"
+              f"{moving[name] / 1e6:>24.0f}{moving[name] / moving['flat']:>8.2f}")  # fmt: skip
 
     print("\n  ratios (per core, batch on 1 thread)")
     print(f"  {'numba single / NumPy 1 robot':<44}{single / np_rates[1]:>12.1f}")

@@ -51,7 +51,7 @@ import math
 import numpy as np
 from numba import njit
 
-from softevo.core.physics.contact import JIT, contact_pass
+from softevo.core.physics.contact import JIT, contact_pass, contact_scratch
 
 #: Smallest spring length divided by (guards a collapsed or padding spring against 0 / 0).
 D_MIN = 1e-12
@@ -100,8 +100,8 @@ def _integrate_terrain(
     contact, near,
 ):  # fmt: skip
     """`_integrate` on any terrain: the penalty force along the surface normal, Coulomb
-    friction against the velocity's part in the tangent plane (`contact` [9, M] and `near` [M]:
-    scratch for `contact_pass`)."""
+    friction against the velocity's part in the tangent plane (`contact` and `near`: scratch
+    for `contact_pass`)."""
     contact_pass(kind, tp, x, y, z, step_factor, contact, near)
     depth, nx, ny, nz = contact[0], contact[1], contact[2], contact[3]
     for m in range(x.shape[0]):
@@ -176,7 +176,7 @@ def simulate_one(
         first[m + 1] += first[m]
     incident = np.empty(2 * n_springs, dtype=np.int64)
     fill = first[:-1].copy()
-    contact = np.empty((9, n_masses))  # terrain contact scratch (`_contact_pass`)
+    contact = contact_scratch(n_masses)  # terrain contact scratch (`contact_pass`)
     near = np.empty(n_masses, dtype=np.int64)
     for s in range(n_springs):
         incident[fill[spring_a[s]]] = s
@@ -270,7 +270,7 @@ def simulate_many(
     fx = np.empty(n)
     fy = np.empty(n)
     fz = np.empty(n)
-    contact = np.empty((9, n))  # terrain contact scratch (`_contact_pass`)
+    contact = contact_scratch(n)  # terrain contact scratch (`contact_pass`)
     near = np.empty(n, dtype=np.int64)
     for step in range(n_steps + 1):
         if step == settle_step:
