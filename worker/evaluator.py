@@ -42,7 +42,6 @@ from softevo.core.evaluator import (
     batch_digest,
     refuse_dropped,
 )
-from softevo.core.nulls import from_nulls
 from softevo.worker.queue import (
     JOB_FUNCTION,
     QUEUE,
@@ -102,8 +101,9 @@ class RQEvaluator(Evaluator):
         if "refused" in payload:  # a worker of another engine: never a silently other curve
             raise EngineMismatchError(str(payload["refused"]))
         if "fitness" in payload:
-            fitness = from_nulls(payload["fitness"])
-            return BatchResult(fitness, str(payload.get("worker", "")), float(payload["seconds"]))
+            return BatchResult.measured(
+                payload, str(payload.get("worker", "")), float(payload["seconds"])
+            )
         if len(files) == 1:
             log.warning("batch %s failed for good: %s", key, payload.get("error"))
             return BatchResult(np.array([math.nan]), str(payload.get("worker", "")), 0.0)
@@ -113,6 +113,7 @@ class RQEvaluator(Evaluator):
             np.concatenate([part.fitness for part in parts]),
             ",".join(sorted({part.worker for part in parts if part.worker})),
             sum(part.seconds for part in parts),
+            np.concatenate([part.headings() for part in parts]),
         )
 
     def capacity(self) -> int:
@@ -346,11 +347,13 @@ def parse_result(raw: bytes | str, robots: int) -> dict[str, Any] | None:
     if not isinstance(payload, dict) or not isinstance(payload.get("worker", ""), str):
         return None
     if "fitness" in payload:
-        fitness, seconds = payload["fitness"], payload.get("seconds")
-        if not isinstance(fitness, list) or len(fitness) != robots:
-            return None
-        if not all(v is None or type(v) in (int, float) for v in fitness):
-            return None
+        seconds = payload.get("seconds")
+        for name in ("fitness", "heading"):  # a robot's measures: a number each, or None
+            values = payload.get(name)
+            if not isinstance(values, list) or len(values) != robots:
+                return None
+            if not all(v is None or type(v) in (int, float) for v in values):
+                return None
         if type(seconds) not in (int, float) or seconds < 0:
             return None
         return payload
