@@ -66,8 +66,7 @@ CATALOGUE: dict[str, Descriptor] = {
         Descriptor("height", 0.0, 1.0, lambda b: b.z_extent / b.box[2],
                    "vertical extent of the body relative to the box's height"),
         Descriptor("heading", -180.0, 180.0, None,
-                   "direction of the net horizontal displacement, degrees counter-clockwise "
-                   "from +x"),
+                   "direction of travel (degrees, 0 = +x, 90 = +y)"),
     )
 }  # fmt: skip
 
