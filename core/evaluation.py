@@ -23,8 +23,7 @@ from concurrent.futures import CancelledError, Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
-
-from softevo.core.evaluator import BatchResult, Evaluator, refuse_dropped
+from softevo.core.evaluator import BatchResult, Evaluator, Measures, refuse_dropped
 from softevo.core.nulls import to_null
 from softevo.core.objectives import NEEDS_ENERGY
 from softevo.core.physics import simulate, simulate_batch
@@ -33,9 +32,9 @@ from softevo.core.robot_file import RobotFileError, file_objective, parse_robot
 from softevo.core.settings import sim_settings
 
 
-def evaluate_robot_files(robot_files: Sequence[dict[str, Any]]) -> dict[str, list[float | None]]:
+def evaluate_robot_files(robot_files: Sequence[dict[str, Any]]) -> Measures:
     """The job function: robot files in, each one's `fitness` (its file's `objective`, speed by
-    default) and `heading` (`SimResult.heading`, degrees) out; None for a failed robot, JSON-safe."""
+    default) and `heading` (`SimResult.heading`, degrees) out; None for a failed robot."""
     robots: list[Robot | None] = []
     for document in robot_files:
         try:
@@ -56,7 +55,7 @@ def evaluate_robot_files(robot_files: Sequence[dict[str, Any]]) -> dict[str, lis
     return {"fitness": fitness, "heading": heading}
 
 
-def _timed(name: str, evaluate: Callable[[], dict[str, list[float | None]]]) -> BatchResult:
+def _timed(name: str, evaluate: Callable[[], Measures]) -> BatchResult:
     started = time.perf_counter()
     measured = evaluate()
     seconds = time.perf_counter() - started
@@ -129,7 +128,7 @@ class PoolEvaluator(Evaluator):
             raise ValueError(f"processes must be >= 1, got {self.processes}")
         self._lock = threading.Lock()
         self._pool = self._new_pool()
-        self._batches: dict[Future[dict[str, list[float | None]]], str] = {}  # in the pool: key each
+        self._batches: dict[Future[Measures], str] = {}  # in the pool: key each
         self._dropped: set[str] = set()  # key prefixes given up
         self._replaced: weakref.WeakSet[ProcessPoolExecutor] = weakref.WeakSet()  # by `drop`
 
@@ -148,7 +147,7 @@ class PoolEvaluator(Evaluator):
         files = list(robot_files)
         return _timed("PoolEvaluator", lambda: self._run(files, key or ""))
 
-    def _run(self, files: list[dict[str, Any]], key: str) -> dict[str, list[float | None]]:
+    def _run(self, files: list[dict[str, Any]], key: str) -> Measures:
         if not files:
             return {"fitness": [], "heading": []}
         attempt = 1
@@ -156,7 +155,7 @@ class PoolEvaluator(Evaluator):
             with self._lock:
                 refuse_dropped(key, self._dropped)
                 pool = self._pool
-            future: Future[dict[str, list[float | None]]] | None = None
+            future: Future[Measures] | None = None
             try:
                 with self._lock:
                     future = pool.submit(evaluate_robot_files, files)

@@ -24,6 +24,9 @@ import numpy as np
 from softevo.core.limits import BATCH_SIZE, IN_FLIGHT
 from softevo.core.nulls import from_nulls
 
+#: The job function's output, JSON-safe: `fitness` and `heading` lists, None for a failed robot.
+Measures = dict[str, list[float | None]]
+
 
 @dataclass(frozen=True)
 class BatchResult:
@@ -37,11 +40,10 @@ class BatchResult:
     heading: np.ndarray | None = None
 
     @classmethod
-    def measured(
-        cls, measured: dict[str, list[float | None]], worker: str, seconds: float
-    ) -> BatchResult:
-        """From the job function's JSON-safe output (`fitness`, `heading`: None = failed)."""
-        return cls(from_nulls(measured["fitness"]), worker, seconds, from_nulls(measured["heading"]))
+    def measured(cls, measured: Measures, worker: str, seconds: float) -> BatchResult:
+        """From the job function's output (`Measures`)."""
+        fitness, heading = from_nulls(measured["fitness"]), from_nulls(measured["heading"])
+        return cls(fitness, worker, seconds, heading)
 
     def headings(self) -> np.ndarray:
         """Every robot's heading, NaN where not measured."""

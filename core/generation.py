@@ -111,8 +111,9 @@ class Engine:
             files = [self.robot_file(individuals[i]) for i in todo]
 
             def landed(positions: list[int], result: BatchResult) -> None:
-                heading.update(zip((todo[p] for p in positions), result.headings().tolist()))
-                hooks.batch(generation, [todo[p] for p in positions], result)
+                indices = [todo[p] for p in positions]
+                heading.update(zip(indices, result.headings().tolist(), strict=True))
+                hooks.batch(generation, indices, result)
 
             values = evaluate_in_batches(
                 evaluator, files, f"{key}-gen{generation}", batch_size=self.batch_size,

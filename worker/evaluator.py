@@ -100,13 +100,12 @@ class RQEvaluator(Evaluator):
         payload = self.collect(files, key)
         if "refused" in payload:  # a worker of another engine: never a silently other curve
             raise EngineMismatchError(str(payload["refused"]))
+        worker = str(payload.get("worker", ""))
         if "fitness" in payload:
-            return BatchResult.measured(
-                payload, str(payload.get("worker", "")), float(payload["seconds"])
-            )
+            return BatchResult.measured(payload, worker, float(payload["seconds"]))
         if len(files) == 1:
             log.warning("batch %s failed for good: %s", key, payload.get("error"))
-            return BatchResult(np.array([math.nan]), str(payload.get("worker", "")), 0.0)
+            return BatchResult(np.array([math.nan]), worker, 0.0)
         log.warning("batch %s failed (%s); retrying robot by robot", key, payload.get("error"))
         parts = [self.evaluate_batch([file], f"{key}-{i}") for i, file in enumerate(files)]
         return BatchResult(
@@ -348,8 +347,7 @@ def parse_result(raw: bytes | str, robots: int) -> dict[str, Any] | None:
         return None
     if "fitness" in payload:
         seconds = payload.get("seconds")
-        for name in ("fitness", "heading"):  # a robot's measures: a number each, or None
-            values = payload.get(name)
+        for values in (payload["fitness"], payload.get("heading")):  # a number each, or None
             if not isinstance(values, list) or len(values) != robots:
                 return None
             if not all(v is None or type(v) in (int, float) for v in values):

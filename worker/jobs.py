@@ -1,6 +1,6 @@
-"""The jobs an RQ worker runs: a batch of robot files in, fitness and headings out, pushed onto the batch's
-result list (`softevo.worker.queue.result_key`) so the coordinator wakes at once; and a replay of
-one robot (its frames), pushed the same way. Plain JSON both ways.
+"""The jobs an RQ worker runs: a batch of robot files in, fitness and headings out, pushed onto
+the batch's result list (`softevo.worker.queue.result_key`) so the coordinator wakes at once; and
+a replay of one robot (its frames), pushed the same way. Plain JSON both ways.
 
 A robot that cannot be built or whose simulation blows up has fitness None (NaN): failed, never
 0. Anything else that goes wrong is reported as `error`, and the evaluator retries the robots one

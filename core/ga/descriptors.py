@@ -74,7 +74,6 @@ CATALOGUE: dict[str, Descriptor] = {
 MEASURED = frozenset(name for name, d in CATALOGUE.items() if d.describe is None)
 
 
-
 def body(labels: Sequence[int], box: tuple[int, int, int]) -> Body | None:
     """The body a voxel genome's labels build (None: no voxel filled, nothing to simulate)."""
     layer = box[0] * box[1]

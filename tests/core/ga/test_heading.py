@@ -64,9 +64,8 @@ def test_a_robot_without_a_measured_heading_has_no_cell() -> None:
     assert describe(["heading", "voxels"], labels, box, {"heading": -90.0}) == (-90.0, 4 / 6)
     assert describe(["heading"], labels, box, {"heading": math.nan}) == ()
     assert describe(["heading"], labels, box) == ()
-    assert MEASURED == {"heading"} and (CATALOGUE["heading"].low, CATALOGUE["heading"].high) == (
-        -180.0, 180.0,
-    )  # fmt: skip
+    assert {"heading"} == MEASURED
+    assert (CATALOGUE["heading"].low, CATALOGUE["heading"].high) == (-180.0, 180.0)
 
 
 def run(request: dict, evaluator) -> Evolution:
