@@ -90,9 +90,11 @@ class RunDriver(Hooks):
 
     # -- the hooks of the generation step -------------------------------------------------------
 
-    def individuals(self, generation: int, individuals: list[Individual]) -> dict[int, float]:
+    def individuals(
+        self, generation: int, individuals: list[Individual]
+    ) -> tuple[dict[int, float], dict[int, float]]:
         if generation == self.kept:  # kept by this driver's last commit, nothing evaluated since
-            return {}
+            return {}, {}
         self.written = time.monotonic()
         return self._fenced(
             store.driving.keep_generation, self.db, self.run_id, self.driving.lease, generation,
@@ -101,7 +103,9 @@ class RunDriver(Hooks):
 
     def batch(self, generation: int, indices: list[int], result: BatchResult) -> None:
         fitness = dict(zip(indices, result.fitness.tolist(), strict=True))
-        self.landed.append(Landed(fitness, result.worker, result.seconds / max(1, len(indices))))
+        heading = dict(zip(indices, result.headings().tolist(), strict=True))
+        seconds_each = result.seconds / max(1, len(indices))
+        self.landed.append(Landed(fitness, result.worker, seconds_each, heading))
         if self._due():
             self._save(generation)
 
@@ -179,11 +183,11 @@ class RunDriver(Hooks):
             algorithm, config.sim, self.driving.batch_size, self.driving.in_flight, config.objective
         )
         state = GAState.from_json(stored_state) if stored_state else algorithm.start(config.seed)
-        cache = store.driving.known_fitness(self.db, self.run_id, state.generation)
+        cache, headings = store.driving.known_fitness(self.db, self.run_id, state.generation)
         while not algorithm.done(state):
             self.check()
             self.generation = state.generation
-            step = engine.step(state, cache, self.driving.evaluator, self, self.key)
+            step = engine.step(state, cache, self.driving.evaluator, self, self.key, headings)
             state = step.state
             upcoming: list[Individual] = []
             if not algorithm.done(state):  # bred now, kept by the same commit
@@ -201,6 +205,11 @@ class RunDriver(Hooks):
             cached={
                 index: value
                 for index, value in enumerate(step.fitness.tolist())
+                if index not in step.evaluated
+            },
+            cached_heading={
+                index: value
+                for index, value in enumerate(step.heading.tolist())
                 if index not in step.evaluated
             },
             landed=self.landed,

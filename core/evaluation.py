@@ -23,10 +23,8 @@ from concurrent.futures import CancelledError, Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
-import numpy as np
-
-from softevo.core.evaluator import BatchResult, Evaluator, refuse_dropped
-from softevo.core.nulls import from_nulls, to_null
+from softevo.core.evaluator import BatchResult, Evaluator, Measures, refuse_dropped
+from softevo.core.nulls import to_null
 from softevo.core.objectives import NEEDS_ENERGY
 from softevo.core.physics import simulate, simulate_batch
 from softevo.core.robot import Robot, VoxelRobot
@@ -34,9 +32,9 @@ from softevo.core.robot_file import RobotFileError, file_objective, parse_robot
 from softevo.core.settings import sim_settings
 
 
-def evaluate_robot_files(robot_files: Sequence[dict[str, Any]]) -> list[float | None]:
-    """The job function: robot files in, fitness out (each file's `objective`, speed by
-    default; None for a failed robot, JSON-safe)."""
+def evaluate_robot_files(robot_files: Sequence[dict[str, Any]]) -> Measures:
+    """The job function: robot files in, each one's `fitness` (its file's `objective`, speed by
+    default) and `heading` (`SimResult.heading`, degrees) out; None for a failed robot."""
     robots: list[Robot | None] = []
     for document in robot_files:
         try:
@@ -47,14 +45,21 @@ def evaluate_robot_files(robot_files: Sequence[dict[str, Any]]) -> list[float | 
     built = [robot for robot in robots if robot is not None]
     energy = any(objective in NEEDS_ENERGY for objective in objectives)
     results = simulate_batch(built, energy=energy) if built else []
-    fitness = iter(r.measure(o) for r, o in zip(results, objectives, strict=True))
-    return [None if robot is None else to_null(next(fitness)) for robot in robots]
+    simulated = iter(zip(results, objectives, strict=True))
+    fitness: list[float | None] = []
+    heading: list[float | None] = []
+    for robot in robots:
+        result, objective = next(simulated) if robot is not None else (None, "")
+        fitness.append(None if result is None else to_null(result.measure(objective)))
+        heading.append(None if result is None else to_null(result.heading))
+    return {"fitness": fitness, "heading": heading}
 
 
-def _timed(name: str, evaluate: Callable[[], np.ndarray]) -> BatchResult:
+def _timed(name: str, evaluate: Callable[[], Measures]) -> BatchResult:
     started = time.perf_counter()
-    fitness = evaluate()
-    return BatchResult(fitness, f"{name}@{socket.gethostname()}", time.perf_counter() - started)
+    measured = evaluate()
+    seconds = time.perf_counter() - started
+    return BatchResult.measured(measured, f"{name}@{socket.gethostname()}", seconds)
 
 
 class SerialEvaluator(Evaluator):
@@ -69,7 +74,7 @@ class SerialEvaluator(Evaluator):
     ) -> BatchResult:
         files = list(robot_files)
         with self._lock:
-            return _timed("SerialEvaluator", lambda: from_nulls(evaluate_robot_files(files)))
+            return _timed("SerialEvaluator", lambda: evaluate_robot_files(files))
 
     def capacity(self) -> int:
         return 1
@@ -123,7 +128,7 @@ class PoolEvaluator(Evaluator):
             raise ValueError(f"processes must be >= 1, got {self.processes}")
         self._lock = threading.Lock()
         self._pool = self._new_pool()
-        self._batches: dict[Future[list[float | None]], str] = {}  # in the pool: key each
+        self._batches: dict[Future[Measures], str] = {}  # in the pool: key each
         self._dropped: set[str] = set()  # key prefixes given up
         self._replaced: weakref.WeakSet[ProcessPoolExecutor] = weakref.WeakSet()  # by `drop`
 
@@ -142,20 +147,20 @@ class PoolEvaluator(Evaluator):
         files = list(robot_files)
         return _timed("PoolEvaluator", lambda: self._run(files, key or ""))
 
-    def _run(self, files: list[dict[str, Any]], key: str) -> np.ndarray:
+    def _run(self, files: list[dict[str, Any]], key: str) -> Measures:
         if not files:
-            return np.empty(0)
+            return {"fitness": [], "heading": []}
         attempt = 1
         while True:
             with self._lock:
                 refuse_dropped(key, self._dropped)
                 pool = self._pool
-            future: Future[list[float | None]] | None = None
+            future: Future[Measures] | None = None
             try:
                 with self._lock:
                     future = pool.submit(evaluate_robot_files, files)
                     self._batches[future] = key
-                return from_nulls(future.result())
+                return future.result()
             except (BrokenProcessPool, CancelledError):
                 with self._lock:
                     refuse_dropped(key, self._dropped)

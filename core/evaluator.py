@@ -22,15 +22,34 @@ from typing import Any, Self
 import numpy as np
 
 from softevo.core.limits import BATCH_SIZE, IN_FLIGHT
+from softevo.core.nulls import from_nulls
+
+#: The job function's output, JSON-safe: `fitness` and `heading` lists, None for a failed robot.
+Measures = dict[str, list[float | None]]
 
 
 @dataclass(frozen=True)
 class BatchResult:
-    """One batch's speeds (m/s, NaN = failed), who evaluated it and how long it took (s)."""
+    """One batch's fitness (NaN = failed), who evaluated it, how long it took (s), and each
+    robot's heading (`SimResult.heading`, degrees; NaN = failed; None: not measured), which the
+    `heading` descriptor needs."""
 
     fitness: np.ndarray
     worker: str
     seconds: float
+    heading: np.ndarray | None = None
+
+    @classmethod
+    def measured(cls, measured: Measures, worker: str, seconds: float) -> BatchResult:
+        """From the job function's output (`Measures`)."""
+        fitness, heading = from_nulls(measured["fitness"]), from_nulls(measured["heading"])
+        return cls(fitness, worker, seconds, heading)
+
+    def headings(self) -> np.ndarray:
+        """Every robot's heading, NaN where not measured."""
+        if self.heading is None:
+            return np.full(len(self.fitness), np.nan)
+        return np.asarray(self.heading, dtype=np.float64)
 
 
 class BatchDroppedError(RuntimeError):

@@ -38,12 +38,14 @@ class Progress:
 
 @dataclass
 class Evolution:
-    """A run in progress in this process: its engine, state, fitness cache and counters."""
+    """A run in progress in this process: its engine, state, fitness cache (and the measured
+    headings beside it) and counters."""
 
     config: RunConfig
     engine: Engine
     state: GAState
     cache: dict[str, float] = field(default_factory=dict)
+    headings: dict[str, float] = field(default_factory=dict)
     evaluations: int = 0
     saved: int = 0
     elapsed: float = 0.0
@@ -59,16 +61,23 @@ class Evolution:
 
     @classmethod
     def resume(
-        cls, config: RunConfig, state: GAState, cache: dict[str, float], elapsed: float = 0.0
+        cls,
+        config: RunConfig,
+        state: GAState,
+        cache: dict[str, float],
+        elapsed: float = 0.0,
+        headings: dict[str, float] | None = None,
     ) -> Evolution:
-        """A stopped run, going on from its state and fitness cache: the generations still to
-        run are those an uninterrupted run would have run (breeding depends on the seed and
-        the stored generation only), and with the cache so are their counts."""
+        """A stopped run, going on from its state and fitness cache (and headings, for the
+        `heading` descriptor): the generations still to run are those an uninterrupted run
+        would have run (breeding depends on the seed and the stored generation only), and with
+        the cache so are their counts."""
         if state.seed != config.seed:
             raise ValueError(f"the state is of seed {state.seed}, the config of {config.seed}")
         evolution = cls.start(config)
         evolution.state = state
         evolution.cache = dict(cache)
+        evolution.headings = dict(headings or {})
         evolution.evaluations = sum(stats.evaluations for stats in state.history)
         evolution.saved = sum(stats.saved for stats in state.history)
         evolution.elapsed = elapsed
@@ -92,7 +101,7 @@ class Evolution:
     def step(self, evaluator: Evaluator) -> GenerationStats:
         """Evaluate and tell one generation (the one generation step of
         `softevo.core.generation`)."""
-        step = self.engine.step(self.state, self.cache, evaluator)
+        step = self.engine.step(self.state, self.cache, evaluator, headings=self.headings)
         self.state = step.state
         self.evaluations += step.stats.evaluations
         self.saved += step.stats.saved

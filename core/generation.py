@@ -32,10 +32,13 @@ class Hooks:
     def check(self) -> None:
         """Raise to stop the step (cancelled, lease lost, shutdown); called while batches run."""
 
-    def individuals(self, generation: int, individuals: list[Individual]) -> dict[int, float]:
+    def individuals(
+        self, generation: int, individuals: list[Individual]
+    ) -> tuple[dict[int, float], dict[int, float]]:
         """The generation is about to be evaluated: keep it; return fitness already known for
-        some of its members (by index; NaN = failed), which are then not simulated again."""
-        return {}
+        some of its members (by index; NaN = failed), which are then not simulated again, and
+        the headings known for them (a member without one gets NaN)."""
+        return {}, {}
 
     def batch(self, generation: int, indices: list[int], result: BatchResult) -> None:
         """One batch's fitness landed (for `indices` of the generation, in order)."""
@@ -47,6 +50,7 @@ class Step:
 
     individuals: list[Individual]
     fitness: np.ndarray  # of every individual, in order (NaN = failed)
+    heading: np.ndarray  # of every individual, in order (degrees; NaN = failed or unknown)
     evaluated: frozenset[int]  # indices whose fitness came from this step (not from the cache)
     stats: GenerationStats
     state: GAState  # the state after the generation was told
@@ -84,14 +88,17 @@ class Engine:
         evaluator: Evaluator,
         hooks: Hooks | None = None,
         key: str = "local",
+        headings: dict[str, float] | None = None,
     ) -> Step:
         """Run generation `state.generation`. `cache` (genome hash -> fitness of the run's
-        earlier generations) gains this generation's new genomes; `key` prefixes batch keys."""
+        earlier generations) gains this generation's new genomes, and so does `headings`
+        (genome hash -> heading, beside it); `key` prefixes batch keys."""
         hooks = hooks or Hooks()
+        headings = {} if headings is None else headings
         started = time.perf_counter()
         generation = state.generation
         individuals = self.algorithm.ask(state)
-        known = hooks.individuals(generation, individuals)
+        known, known_heading = hooks.individuals(generation, individuals)
         hashes = [individual.genome.hash for individual in individuals]
         first: dict[str, int] = {}
         for index, genome_hash in enumerate(hashes):
@@ -99,11 +106,14 @@ class Engine:
                 first[genome_hash] = index
         todo = [index for index in first.values() if index not in known]
         fitness = {index: known[index] for index in first.values() if index in known}
+        heading = {index: known_heading.get(index, np.nan) for index in fitness}
         if todo:
             files = [self.robot_file(individuals[i]) for i in todo]
 
             def landed(positions: list[int], result: BatchResult) -> None:
-                hooks.batch(generation, [todo[p] for p in positions], result)
+                indices = [todo[p] for p in positions]
+                heading.update(zip(indices, result.headings().tolist(), strict=True))
+                hooks.batch(generation, indices, result)
 
             values = evaluate_in_batches(
                 evaluator, files, f"{key}-gen{generation}", batch_size=self.batch_size,
@@ -111,14 +121,18 @@ class Engine:
             )  # fmt: skip
             fitness.update(zip(todo, values.tolist(), strict=True))
         cache.update({hashes[index]: value for index, value in fitness.items()})
+        headings.update({hashes[index]: value for index, value in heading.items()})
         values = np.array([cache[h] for h in hashes], dtype=np.float64)
+        directions = np.array([headings.get(h, np.nan) for h in hashes], dtype=np.float64)
         evaluations = len(first)
         following, stats = self.algorithm.tell(
             state,
             individuals,
             values,
+            heading=directions,
             evaluations=evaluations,
             saved=len(individuals) - evaluations,
         )
         seconds = time.perf_counter() - started
-        return Step(individuals, values, frozenset(first.values()), stats, following, seconds)
+        evaluated = frozenset(first.values())
+        return Step(individuals, values, directions, evaluated, stats, following, seconds)

@@ -6,8 +6,9 @@ interrupted run still has its partial results:
     curve.json        {"run": config, "generations": [rows]}, the same as `softevo run --json`
     best_robot.json   the fastest robot so far, a softevo.robot/1 file
     state.json        the genetic algorithm's state (JSON), for inspection or resuming
-    cache.json        the fitness of every genome simulated so far (by genome hash) and the
-                      wall time, with state.json what `softevo run --resume DIR` goes on from
+    cache.json        the fitness of every genome simulated so far (by genome hash), their
+                      headings (a run with the `heading` descriptor) and the wall time, with
+                      state.json what `softevo run --resume DIR` goes on from
     population.csv    every individual: generation, index, fitness (empty: failed), operator
     curve.png, population.png, diversity.png   the run's figures, written at the end
     archive.json, archive.csv, archive.png     a run with descriptors: its MAP-Elites archive
@@ -44,12 +45,18 @@ def write_results(out: Path, evolution: Evolution) -> None:
     _write_json(out / "config.json", result.config)
     _write_json(out / "curve.json", {"run": result.config, "generations": result.curve})
     _write_json(out / "state.json", result.state)
+    headings = (  # only a run that uses them keeps them: other runs' files stay as they were
+        {"heading": {key: to_null(value) for key, value in evolution.headings.items()}}
+        if "heading" in evolution.config.descriptors
+        else {}
+    )
     _write_json(
         out / "cache.json",
         {
             "generation": evolution.state.generation,  # of state.json, checked on resuming
             "elapsed": evolution.elapsed,
             "fitness": {key: to_null(value) for key, value in evolution.cache.items()},
+            **headings,
         },
     )
     if result.best is not None:
@@ -160,8 +167,10 @@ def read_resumable(folder: Path, generations: int | None = None) -> Evolution:
     except ConfigError as error:
         raise ValueError(f"{folder}/config.json: {error}") from None
     fitness = {key: from_null(value) for key, value in cache["fitness"].items()}
+    headings = {key: from_null(value) for key, value in cache.get("heading", {}).items()}
     _trim_population(folder, state.generation)
-    return Evolution.resume(config, state, fitness, float(cache.get("elapsed", 0.0)))
+    elapsed = float(cache.get("elapsed", 0.0))
+    return Evolution.resume(config, state, fitness, elapsed, headings)
 
 
 def _trim_population(folder: Path, generations: int) -> None:

@@ -75,8 +75,9 @@ def add_parser(commands: Any) -> None:
     )  # fmt: skip
     run.add_argument(
         "--descriptors", type=_names, metavar="A,B",
-        help="MAP-Elites descriptors, e.g. voxels,actuated: " + "; ".join(
-            f"{d.name}: {d.help}" for d in CATALOGUE.values()),
+        help="MAP-Elites descriptors, e.g. voxels,actuated or heading,voxels: " + "; ".join(
+            f"{d.name} [{d.low:g}, {d.high:g}]: {d.help}" for d in CATALOGUE.values())
+        + " (heading is measured by the simulation, the others read from the body)",
     )  # fmt: skip
     run.add_argument(
         "--bins", type=_counts, metavar="N,M", help="cells along each descriptor, e.g. 10,10"

@@ -42,7 +42,6 @@ from softevo.core.evaluator import (
     batch_digest,
     refuse_dropped,
 )
-from softevo.core.nulls import from_nulls
 from softevo.worker.queue import (
     JOB_FUNCTION,
     QUEUE,
@@ -101,18 +100,19 @@ class RQEvaluator(Evaluator):
         payload = self.collect(files, key)
         if "refused" in payload:  # a worker of another engine: never a silently other curve
             raise EngineMismatchError(str(payload["refused"]))
+        worker = str(payload.get("worker", ""))
         if "fitness" in payload:
-            fitness = from_nulls(payload["fitness"])
-            return BatchResult(fitness, str(payload.get("worker", "")), float(payload["seconds"]))
+            return BatchResult.measured(payload, worker, float(payload["seconds"]))
         if len(files) == 1:
             log.warning("batch %s failed for good: %s", key, payload.get("error"))
-            return BatchResult(np.array([math.nan]), str(payload.get("worker", "")), 0.0)
+            return BatchResult(np.array([math.nan]), worker, 0.0)
         log.warning("batch %s failed (%s); retrying robot by robot", key, payload.get("error"))
         parts = [self.evaluate_batch([file], f"{key}-{i}") for i, file in enumerate(files)]
         return BatchResult(
             np.concatenate([part.fitness for part in parts]),
             ",".join(sorted({part.worker for part in parts if part.worker})),
             sum(part.seconds for part in parts),
+            np.concatenate([part.headings() for part in parts]),
         )
 
     def capacity(self) -> int:
@@ -346,11 +346,12 @@ def parse_result(raw: bytes | str, robots: int) -> dict[str, Any] | None:
     if not isinstance(payload, dict) or not isinstance(payload.get("worker", ""), str):
         return None
     if "fitness" in payload:
-        fitness, seconds = payload["fitness"], payload.get("seconds")
-        if not isinstance(fitness, list) or len(fitness) != robots:
-            return None
-        if not all(v is None or type(v) in (int, float) for v in fitness):
-            return None
+        seconds = payload.get("seconds")
+        for values in (payload["fitness"], payload.get("heading")):  # a number each, or None
+            if not isinstance(values, list) or len(values) != robots:
+                return None
+            if not all(v is None or type(v) in (int, float) for v in values):
+                return None
         if type(seconds) not in (int, float) or seconds < 0:
             return None
         return payload

@@ -1,6 +1,6 @@
-"""The jobs an RQ worker runs: a batch of robot files in, speeds out, pushed onto the batch's
-result list (`softevo.worker.queue.result_key`) so the coordinator wakes at once; and a replay of
-one robot (its frames), pushed the same way. Plain JSON both ways.
+"""The jobs an RQ worker runs: a batch of robot files in, fitness and headings out, pushed onto
+the batch's result list (`softevo.worker.queue.result_key`) so the coordinator wakes at once; and
+a replay of one robot (its frames), pushed the same way. Plain JSON both ways.
 
 A robot that cannot be built or whose simulation blows up has fitness None (NaN): failed, never
 0. Anything else that goes wrong is reported as `error`, and the evaluator retries the robots one
@@ -26,7 +26,7 @@ def evaluate_batch(batch_key: str, robot_files: list[dict[str, Any]]) -> dict[st
     job = get_current_job()  # the worker's name is on the job for every worker class
     worker = (job and job.worker_name) or f"{socket.gethostname()}:{os.getpid()}"
     try:
-        payload: dict[str, Any] = {"fitness": evaluate_robot_files(robot_files)}
+        payload: dict[str, Any] = dict(evaluate_robot_files(robot_files))
     except Exception as error:
         payload = {"error": f"{type(error).__name__}: {error}"[:1000]}
     payload.update(worker=worker, seconds=time.perf_counter() - started, robots=len(robot_files))
@@ -47,7 +47,7 @@ def replay(
     try:
         (document,) = robot_files
         data = replay_frames(parse_robot(document), float(fps), int(max_positions))
-        payload: dict[str, Any] = {"fitness": [data["speed"]], "replay": data}
+        payload: dict[str, Any] = {"fitness": [data["speed"]], "heading": [None], "replay": data}
     except (RobotFileError, ValueError, TypeError) as error:
         payload = {"error": f"{type(error).__name__}: {error}"[:1000]}
     payload.update(worker=worker, seconds=time.perf_counter() - started, robots=1)

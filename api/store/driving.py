@@ -1,12 +1,14 @@
 """The coordinator's reads and writes while it drives a run: the run to drive, the fitness its
 earlier generations already have, a generation's individuals (one multi-row insert), batches'
 fitness (one statement for any number of batches) and the generation's commit (its fitness,
-statistics, GA state and counters, and the next generation's members, all or nothing). Every
+statistics, GA state and counters, and the next generation's members, all or nothing); each
+individual's measured heading is written and read beside its fitness. Every
 write is fenced by the lease in its own transaction (`leases.owns`), so a coordinator that lost
 the run can never write over its successor."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -58,42 +60,52 @@ def load(db: Database, run_id: int) -> tuple[dict[str, Any], dict[str, Any] | No
         return row.config, row.ga_state
 
 
-def known_fitness(db: Database, run_id: int, before: int) -> dict[str, float]:
-    """Fitness (NaN = failed) of every genome evaluated in generations before `before`."""
+def known_fitness(
+    db: Database, run_id: int, before: int
+) -> tuple[dict[str, float], dict[str, float]]:
+    """Fitness (NaN = failed) of every genome evaluated in generations before `before`, and
+    their headings (NaN = failed or stored before revision 0003), by genome hash."""
     with db.read() as session:
         rows = session.execute(
-            select(Individual.genome_hash, Individual.fitness).where(
+            select(Individual.genome_hash, Individual.fitness, Individual.heading).where(
                 Individual.run_id == run_id,
                 Individual.generation < before,
                 Individual.status != IndividualStatus.PENDING,
             )
-        )
-        return {genome_hash: from_null(fitness) for genome_hash, fitness in rows}
+        ).all()
+        fitness = {genome_hash: from_null(value) for genome_hash, value, _ in rows}
+        return fitness, {genome_hash: from_null(heading) for genome_hash, _, heading in rows}
 
 
 def keep_generation(
     db: Database, run_id: int, lease: Lease, generation: int, members: Sequence[dict[str, Any]]
-) -> dict[int, float]:
+) -> tuple[dict[int, float], dict[int, float]]:
     """Insert the generation's members (dicts of genome, genome_hash, operator, parents), once;
-    if it was kept before (a takeover), check it is the same and return the fitness saved."""
+    if it was kept before (a takeover), check it is the same and return the fitness and
+    headings saved (by index)."""
     with db.writing() as connection:
         _fence(connection, run_id, lease)
         columns = INDIVIDUALS.c
         rows = connection.execute(
-            select(columns["index"], columns.genome_hash, columns.status, columns.fitness)
+            select(columns["index"], columns.genome_hash, columns.status, columns.fitness,
+                   columns.heading)
             .where(columns.run_id == run_id, columns.generation == generation)
         ).all()  # fmt: skip
         if not rows:
             _insert_members(connection, run_id, generation, members)
-            return {}
+            return {}, {}
         stored = {row.index: row.genome_hash for row in rows}
         if stored != {index: member["genome_hash"] for index, member in enumerate(members)}:
             raise GenerationMismatchError(
                 f"generation {generation} in the database differs from the one the GA "
                 "regenerated from the run's seed; refusing to mix them"
             )
-        done = (IndividualStatus.EVALUATED, IndividualStatus.FAILED)
-        return {row.index: from_null(row.fitness) for row in rows if row.status in done}
+        done = [row for row in rows if row.status in (IndividualStatus.EVALUATED,
+                                                      IndividualStatus.FAILED)]  # fmt: skip
+        return (
+            {row.index: from_null(row.fitness) for row in done},
+            {row.index: from_null(row.heading) for row in done},
+        )
 
 
 _SET_FITNESS = DriverStatement(
@@ -106,6 +118,7 @@ _SET_FITNESS = DriverStatement(
     )
     .values(
         fitness=bindparam("b_fitness"),
+        heading=bindparam("b_heading"),
         status=bindparam("b_status"),
         eval_seconds=bindparam("b_seconds"),
         worker=bindparam("b_worker"),
@@ -117,11 +130,13 @@ _SET_FITNESS = DriverStatement(
 @dataclass(frozen=True)
 class Landed:
     """One batch's fitness (by index in its generation; NaN = failed), the worker that
-    evaluated it and the seconds each of its robots took (None for fitness from the cache)."""
+    evaluated it, the seconds each of its robots took (None for fitness from the cache) and
+    their headings (by index; missing or NaN: stored as NULL)."""
 
     fitness: dict[int, float]
     worker: str | None
     seconds_each: float | None
+    heading: dict[int, float] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -136,6 +151,7 @@ class GenerationCommit:
     stats: dict[str, Any]
     state: dict[str, Any]
     cached: dict[int, float] = field(default_factory=dict)
+    cached_heading: dict[int, float] = field(default_factory=dict)  # headings of `cached`
     landed: Sequence[Landed] = ()
     best: tuple[float, int] | None = None
     done: bool = False
@@ -151,6 +167,7 @@ def _fitness_rows(
     return [
         {"b_run": run_id, "b_generation": generation, "b_index": index,
          "b_fitness": to_null(value), "b_seconds": batch.seconds_each,
+         "b_heading": to_null(batch.heading.get(index, math.nan)),
          "b_worker": None if batch.worker is None else batch.worker[:128], "b_at": at,
          "b_status": (status or (IndividualStatus.EVALUATED if to_null(value) is not None
                                  else IndividualStatus.FAILED)).value}
@@ -238,7 +255,7 @@ def commit_generation(db: Database, run_id: int, lease: Lease, commit: Generatio
     with db.writing() as connection:
         _fence(connection, run_id, lease)
         rows = _fitness_rows(run_id, generation, commit.landed)
-        cached = [Landed(commit.cached, None, None)]
+        cached = [Landed(commit.cached, None, None, commit.cached_heading)]
         rows += _fitness_rows(run_id, generation, cached, IndividualStatus.CACHED)
         if rows:
             _SET_FITNESS.execute(connection, rows)

@@ -62,7 +62,8 @@ class GAConfig(BaseModel):
     descriptors: tuple[str, ...] = Field(
         (),
         description="quality-diversity descriptors (softevo.core.ga.descriptors: voxels, "
-        "actuated, soft, height); required by map-elites, and with any other algorithm an "
+        "actuated, soft, height from the body; heading, in degrees, measured by the "
+        "simulation); required by map-elites, and with any other algorithm an "
         "archive is kept beside it for comparison",
     )
     bins: tuple[int, ...] = Field((), description="cells along each descriptor's range")
@@ -149,11 +150,14 @@ class GeneticAlgorithm:
         state: GAState,
         individuals: list[Individual],
         fitness: np.ndarray | list[float],
+        *,
+        heading: np.ndarray | list[float] | None = None,
         **counts: int,
     ) -> tuple[GAState, GenerationStats]:
         """The state after `individuals` (what `ask(state)` gave) scored `fitness` (NaN =
-        failed), and the generation's statistics; `counts` (evaluations, saved, failed, ...)
-        are stored with them."""
+        failed), and the generation's statistics; `heading` (degrees, NaN = unknown) is each
+        one's measured heading, which the `heading` descriptor needs; `counts` (evaluations,
+        saved, failed, ...) are stored with the statistics."""
         values = np.asarray(fitness, dtype=np.float64)
         if values.shape != (len(individuals),):
             raise ValueError(
@@ -166,7 +170,8 @@ class GeneticAlgorithm:
             if best is None or values[index] > best[1]:
                 best = (individuals[index].genome, float(values[index]), state.generation)
         best_so_far = best[1] if best is not None else math.nan
-        archive = self._archive(state, individuals, values)
+        headings = np.full(len(individuals), np.nan) if heading is None else np.asarray(heading)
+        archive = self._archive(state, individuals, values, headings)
         stats = generation_stats(
             state.generation,
             values,
@@ -189,19 +194,27 @@ class GeneticAlgorithm:
         return following, stats
 
     def _archive(
-        self, state: GAState, individuals: list[Individual], fitness: np.ndarray
+        self,
+        state: GAState,
+        individuals: list[Individual],
+        fitness: np.ndarray,
+        heading: np.ndarray,
     ) -> Archive | None:
         """The archive after this generation (None for a run without descriptors): each robot
-        that did not fail is offered to the cell its body's descriptors fall in."""
+        that did not fail is offered to the cell its descriptors (of its body, and its measured
+        `heading`) fall in."""
         config = self.config
         if not config.descriptors:
             return None
         archive = state.archive or Archive(config.descriptors, config.bins)
         archive = archive.copy()
         box = self.encoding.shape
-        for index, (individual, value) in enumerate(zip(individuals, fitness, strict=True)):
+        measured = zip(individuals, fitness, heading.tolist(), strict=True)
+        for index, (individual, value, direction) in enumerate(measured):
             if math.isfinite(value):
-                values = describe(config.descriptors, individual.genome.discrete, box)
+                values = describe(
+                    config.descriptors, individual.genome.discrete, box, {"heading": direction}
+                )
                 archive.add(values, float(value), state.generation, index, individual.genome)
         return archive
 

@@ -10,10 +10,17 @@ of the robot's filled voxels (what `softevo.core.lattice` builds; cut-off voxels
 * `height`: vertical extent of the body relative to the box's height, in [0, 1].
 
 They need voxel labels, so they are defined for the voxel encodings (`voxel`, `voxel-phase`).
+
+One is behavioural, measured by the simulation rather than read from the body:
+
+* `heading`: the direction of the centre of mass's net horizontal displacement from settle
+  time to the end (`SimResult.heading`), degrees counter-clockwise from +x (90: +y), in
+  [-180, 180]; 0 for a robot that did not move at all.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
@@ -39,8 +46,8 @@ class Descriptor:
     name: str
     low: float
     high: float
-    describe: Callable[[Body], float]
-    help: str
+    describe: Callable[[Body], float] | None  # None: measured by the simulation (`MEASURED`)
+    help: str  # says the unit where there is one (axis labels are "name: help")
 
 
 def _fraction(body: Body, labels: tuple[int, ...]) -> float:
@@ -58,8 +65,13 @@ CATALOGUE: dict[str, Descriptor] = {
                    "soft fraction of the filled voxels"),
         Descriptor("height", 0.0, 1.0, lambda b: b.z_extent / b.box[2],
                    "vertical extent of the body relative to the box's height"),
+        Descriptor("heading", -180.0, 180.0, None,
+                   "direction of travel (degrees, 0 = +x, 90 = +y)"),
     )
 }  # fmt: skip
+
+#: The behavioural descriptors: measured by the simulation (each a `SimResult` attribute).
+MEASURED = frozenset(name for name, d in CATALOGUE.items() if d.describe is None)
 
 
 def body(labels: Sequence[int], box: tuple[int, int, int]) -> Body | None:
@@ -116,9 +128,26 @@ def _masks(box: tuple[int, int, int]) -> tuple[int, int, int, int, int]:
     )
 
 
-def describe(names: Sequence[str], labels: Sequence[int], box: tuple[int, int, int]) -> tuple:
-    """The descriptor values (in `names`' order) of a voxel genome, or () if it builds nothing."""
+def describe(
+    names: Sequence[str],
+    labels: Sequence[int],
+    box: tuple[int, int, int],
+    measured: dict[str, float] | None = None,
+) -> tuple:
+    """The descriptor values (in `names`' order) of a voxel genome, the behavioural ones taken
+    from `measured` (name -> value); () if it builds nothing or a measured value is missing or
+    NaN (a robot whose behaviour is unknown has no cell)."""
     built = body(labels, box)
     if built is None:
         return ()
-    return tuple(float(CATALOGUE[name].describe(built)) for name in names)
+    values = []
+    for name in names:
+        describe_body = CATALOGUE[name].describe
+        if describe_body is None:
+            value = (measured or {}).get(name, math.nan)
+            if math.isnan(value):
+                return ()
+        else:
+            value = describe_body(built)
+        values.append(float(value))
+    return tuple(values)

@@ -71,6 +71,9 @@ class SimResult:
     climb_rate: float = math.nan  # rise of the centre of mass / measured time (m/s)
     energy: float = math.nan  # actuators' work over the measured time (J; NaN: not measured)
     total_mass: float = math.nan  # (kg)
+    #: direction of the centre of mass's net horizontal displacement, degrees in [-180, 180]
+    #: counter-clockwise from +x (90: +y); 0 for no displacement, NaN when not stable
+    heading: float = math.nan
 
     @property
     def cost_of_transport(self) -> float:
@@ -176,7 +179,15 @@ def _result(
         climb_rate=float(moved[2]),
         energy=energy,
         total_mass=mech.n_masses * mech.sim.mass,
+        heading=_heading(com_end[:2] - com_start[:2]) if stable else math.nan,
     )
+
+
+def _heading(shift: np.ndarray) -> float:
+    """The direction (degrees, [-180, 180], counter-clockwise from +x) of a horizontal shift
+    (dx, dy): atan2 of the net displacement itself, so it is the same bits whoever computes it
+    from the same centres of mass."""
+    return math.degrees(math.atan2(float(shift[1]), float(shift[0])))
 
 
 def simulate(

@@ -36,6 +36,8 @@ REQUEST: dict[str, Any] = {
 #: The same run as MAP-Elites: its archive rides in the GA state the generation commit writes.
 QD_REQUEST = {**REQUEST, "algorithm": "map-elites", "descriptors": ["voxels", "actuated"],
               "bins": [5, 5]}  # fmt: skip
+#: And over the behavioural `heading`: the headings saved before the kill are read back.
+HEADING_REQUEST = {**QD_REQUEST, "descriptors": ["heading", "actuated"], "bins": [8, 5]}
 GENERATIONS = REQUEST["generations"]
 POPULATION = REQUEST["population"]
 #: The server is killed in the first generation from KILL_AT on caught half evaluated; the last
@@ -163,7 +165,9 @@ def _saved_fitness(engine: Engine, run_id: int, generation: int) -> list[tuple[A
 
 @pytest.mark.slow
 @pytest.mark.fault
-@pytest.mark.parametrize("request_body", [REQUEST, QD_REQUEST], ids=["ga", "map-elites"])
+@pytest.mark.parametrize(
+    "request_body", [REQUEST, QD_REQUEST, HEADING_REQUEST], ids=["ga", "map-elites", "heading"]
+)
 def test_sigkill_mid_generation_then_restart_resumes_with_the_same_curve(
     start_server: Callable[[], Server], engine: Engine, request_body: dict[str, Any]
 ) -> None:
@@ -263,9 +267,10 @@ def test_sigkill_mid_generation_then_restart_resumes_with_the_same_curve(
     if evolution.state.archive is not None:  # and the archive is the undisturbed run's
         archive = second.client.get(f"/runs/{run_id}/archive").json()
         assert [
-            (c["cell"], c["fitness"], c["generation"], c["index"]) for c in archive["cells"]
+            (c["cell"], c["values"], c["fitness"], c["generation"], c["index"])
+            for c in archive["cells"]
         ] == [
-            (list(e.cell), e.fitness, e.generation, e.index)
+            (list(e.cell), list(e.values), e.fitness, e.generation, e.index)
             for e in evolution.state.archive.ordered()
         ]
 

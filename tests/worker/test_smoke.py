@@ -168,17 +168,19 @@ def test_a_queue_without_a_live_worker_is_said(redis_server, workers, tmp_path) 
             time.sleep(0.2)
 
 
+@pytest.mark.parametrize("descriptors", [["voxels", "soft"], ["heading", "soft"]])
 def test_a_map_elites_run_on_two_rq_workers_builds_the_serial_archive(
-    redis_server, workers
+    redis_server, workers, descriptors: list[str]
 ) -> None:
-    """The archive and its curve columns do not depend on who simulated the robots."""
+    """The archive and its curve columns do not depend on who simulated the robots, nor does
+    the behavioural `heading` the workers measure."""
     for name in ("left", "right"):
         workers.start(name)
     for name in ("left", "right"):
         workers.wait_ready(name)
     request = {
         "preset": "quick", "population": 8, "generations": 3, "seed": 5, "shape": [2, 2, 2],
-        "algorithm": "map-elites", "descriptors": ["voxels", "soft"], "bins": [4, 4],
+        "algorithm": "map-elites", "descriptors": descriptors, "bins": [4, 4],
         "sim": {"duration": 1.0},
     }  # fmt: skip
     serial = Evolution.start(resolve(request))

@@ -73,7 +73,10 @@ export class ArchiveMap {
       ctx.restore();
     }
     const { coverage, qd_score: qd, cells } = this.data;
+    // what each axis measures, in its unit (the catalogue's words: heading is in degrees)
+    const axes = [first, second].filter(Boolean).map((axis, k) => `${k ? "up" : "across"}: ${axis.name}, ${axis.help}`);
     this.caption.textContent = `${cells.length} of ${cols * rows} cells filled (coverage ${fmt(coverage, 3)}), ` +
-      `QD-score ${fmt(qd)}; colour: elite's ${this.fitness.label} from ${fmt(low)} (dark) to ${fmt(high)} (yellow)`;
+      `QD-score ${fmt(qd)}; colour: elite's ${this.fitness.label} from ${fmt(low)} (dark) to ${fmt(high)} (yellow); ` +
+      `${axes.join("; ")}`;
   }
 }

@@ -54,8 +54,8 @@ def statuses(db: Database, run_id: int) -> dict[int, tuple[str, float | None]]:
 
 def test_a_generation_is_kept_once_and_a_different_one_refused(db: Database) -> None:
     run_id = driven(db)
-    assert store.driving.keep_generation(db, run_id, OWNER, 0, members()) == {}
-    assert store.driving.keep_generation(db, run_id, OWNER, 0, members()) == {}  # again: same
+    assert store.driving.keep_generation(db, run_id, OWNER, 0, members()) == ({}, {})
+    assert store.driving.keep_generation(db, run_id, OWNER, 0, members()) == ({}, {})  # again: same
     assert len(statuses(db, run_id)) == 4
     with pytest.raises(GenerationMismatchError, match="differs"):
         store.driving.keep_generation(db, run_id, OWNER, 0, members("y"))
@@ -74,7 +74,7 @@ def test_a_fitness_is_written_once_and_nan_is_failed_not_zero(db: Database) -> N
         3: (IndividualStatus.PENDING, None),
     }
     # what a successor reads back: fitness saved, NaN for the failed one
-    known = store.driving.keep_generation(db, run_id, OWNER, 0, members())
+    known, _ = store.driving.keep_generation(db, run_id, OWNER, 0, members())
     assert known[0] == 0.5 and math.isnan(known[1]) and set(known) == {0, 1, 2}
 
 
@@ -126,7 +126,7 @@ def test_a_commit_writes_what_landed_and_keeps_the_next_generation(db: Database)
     assert [tuple(row) for row in rows[4:]] == [
         (f"n{i}", IndividualStatus.PENDING, None, None) for i in range(4)
     ]
-    assert store.driving.keep_generation(db, run_id, OWNER, 1, members("n")) == {}
+    assert store.driving.keep_generation(db, run_id, OWNER, 1, members("n")) == ({}, {})
     with pytest.raises(GenerationMismatchError):
         store.driving.keep_generation(db, run_id, OWNER, 1, members("m"))
     assert store.get_run(db, run_id).generations_done == 1
