@@ -13,6 +13,7 @@ import hashlib
 import itertools
 import json
 import math
+import os
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
@@ -114,10 +115,25 @@ def batch_digest(robot_files: Sequence[dict[str, Any]]) -> str:
     return hashlib.sha256(canonical.encode()).hexdigest()[:16]
 
 
+def _new_hands() -> ThreadPoolExecutor:
+    """Threads are made only when none is idle: as many as batches were ever out at once."""
+    return ThreadPoolExecutor(max_workers=256, thread_name_prefix="batch")
+
+
 #: The threads that hand batches to evaluators, shared by every step of the process: started
 #: when first needed and kept, so a generation does not start its few threads afresh (each call
 #: still keeps at most its own number of batches handed over at once).
-_HANDS = ThreadPoolExecutor(max_workers=256, thread_name_prefix="batch")
+_HANDS = _new_hands()
+
+
+def _forget_hands() -> None:
+    """A forked child has none of its parent's threads (its pool would wait on them forever):
+    it starts its own."""
+    global _HANDS
+    _HANDS = _new_hands()
+
+
+os.register_at_fork(after_in_child=_forget_hands)
 
 
 def evaluate_in_batches(
