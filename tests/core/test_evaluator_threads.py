@@ -9,6 +9,7 @@ import threading
 
 import numpy as np
 
+from softevo.core import evaluator
 from softevo.core.evaluator import BatchResult, Evaluator, evaluate_in_batches
 
 
@@ -42,9 +43,11 @@ def test_batch_threads_are_reused_by_the_next_call_and_the_window_holds() -> Non
     first = Recording(2)
     assert evaluate_in_batches(first, files, batch_size=4).tolist() == list(range(40))
     assert first.most <= 4  # two per worker out at once, the other six batches waited
+    started = {thread.ident for thread in evaluator._HANDS._threads}  # by this and earlier calls
+    assert set(first.threads) <= started
     second = Recording(2)
     evaluate_in_batches(second, files[:8], batch_size=4)
-    assert set(second.threads) <= set(first.threads)  # no new thread for the next generation
+    assert set(second.threads) <= started  # no new thread for the next generation
 
 
 def test_a_forked_child_evaluates_on_threads_of_its_own() -> None:
