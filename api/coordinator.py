@@ -201,7 +201,7 @@ class RunDriver(Hooks):
         best = step.state.best
         commit = GenerationCommit(
             stats=step.stats.to_json(),
-            state=step.state.to_json(history=False),  # the curve lives in `generations`
+            state=EncodedJSON(step.state.to_text(history=False)),  # the curve: in `generations`
             cached={
                 index: value
                 for index, value in enumerate(step.fitness.tolist())
@@ -229,9 +229,14 @@ def members(individuals: list[Individual]) -> list[dict[str, Any]]:
     """Individuals as the store keeps them."""
     return [
         {"genome": EncodedJSON(item.genome.canonical), "genome_hash": item.genome.hash,
-         "operator": item.operator, "parents": list(item.parents)}
+         "operator": item.operator, "parents": _parents(item.parents)}
         for item in individuals
     ]  # fmt: skip
+
+
+def _parents(parents: tuple[int, ...]) -> EncodedJSON:
+    """Parent indices as the JSON text `json.dumps` gives them, without its encoder."""
+    return EncodedJSON(f"[{', '.join(str(int(index)) for index in parents)}]")
 
 
 class Coordinator:

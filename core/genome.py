@@ -48,3 +48,10 @@ class Genome:
         """Stable across processes and machines: sha256 of the canonical JSON, 16 hex digits
         (computed once per genome: the genome is frozen)."""
         return hashlib.sha256(self.canonical.encode()).hexdigest()[:16]
+
+
+def with_genome(fields: dict[str, Any], genome: Genome) -> str:
+    """JSON text of `fields` plus `"genome": genome.to_json()`, the genome entering as its
+    canonical text (encoded once, for its hash) rather than encoded again."""
+    head = json.dumps(fields)[:-1]
+    return f'{head}{", " if fields else ""}"genome": {genome.canonical}}}'

@@ -15,7 +15,7 @@ from typing import Any
 
 from sqlalchemy import Connection, bindparam, insert, select, update
 
-from softevo.api.db import Database
+from softevo.api.db import Database, EncodedJSON
 from softevo.api.models import Generation, Individual, Run
 from softevo.api.store import leases
 from softevo.api.store.runs import now
@@ -142,14 +142,15 @@ class Landed:
 @dataclass(frozen=True)
 class GenerationCommit:
     """What one generation's commit writes, all or nothing: its statistics (`stats`:
-    GenerationStats.to_json()), the GA state after it (`state`), the fitness of members copied
+    GenerationStats.to_json()), the GA state after it (`state`: its JSON, or its text as
+    `EncodedJSON`), the fitness of members copied
     from earlier generations (`cached`), batches' fitness not saved yet (`landed`), the run's
     best (fitness, generation), the generation's wall time, and, unless the run is `done`, the
     next generation's members (`upcoming`, as `keep_generation` takes them), so the next step
     needs no transaction of its own to keep them."""
 
     stats: dict[str, Any]
-    state: dict[str, Any]
+    state: dict[str, Any] | EncodedJSON
     cached: dict[int, float] = field(default_factory=dict)
     cached_heading: dict[int, float] = field(default_factory=dict)  # headings of `cached`
     landed: Sequence[Landed] = ()

@@ -23,10 +23,18 @@ class _Compiled:
     fixed: dict[str, Any]  # the statement's own literal values
     processors: tuple[tuple[int, Callable[[Any], Any]], ...]  # (position, to the driver's form)
 
-    def params(self, row: Mapping[str, Any]) -> tuple[Any, ...] | dict[str, Any]:
+    def params(
+        self, row: Mapping[str, Any], done: list[dict[int, tuple[Any, Any]]]
+    ) -> tuple[Any, ...] | dict[str, Any]:
+        """The row in the driver's form; `done` (per processor: the object's id -> (object, its
+        form)) lets the rows of one call convert an object they share (a timestamp) once."""
         values = [row[name] if name in row else self.fixed[name] for name in self.names]
-        for position, process in self.processors:
-            values[position] = process(values[position])
+        for (position, process), converted in zip(self.processors, done, strict=True):
+            value = values[position]
+            known = converted.get(id(value))
+            if known is None or known[0] is not value:
+                known = converted[id(value)] = (value, process(value))  # keeps it alive
+            values[position] = known[1]
         return tuple(values) if self.positional else dict(zip(self.names, values, strict=True))
 
 
@@ -45,7 +53,8 @@ class DriverStatement:
         compiled = self._by_dialect.get(connection.dialect.name) or self._compile(
             connection.dialect
         )
-        params = [compiled.params(row) for row in rows]
+        done: list[dict[int, tuple[Any, Any]]] = [{} for _ in compiled.processors]
+        params = [compiled.params(row, done) for row in rows]
         result = connection.exec_driver_sql(compiled.sql, params if len(params) > 1 else params[0])
         return result.rowcount
 

@@ -13,12 +13,13 @@ the service and its image; docs/evolution.md says more.
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass, field
 from typing import Any
 
 from softevo.core.ga.descriptors import CATALOGUE
-from softevo.core.genome import Genome
+from softevo.core.genome import Genome, with_genome
 
 
 @dataclass(frozen=True)
@@ -104,6 +105,19 @@ class Archive:
             "bins": list(self.bins),
             "elites": [elite.to_json() for elite in self.ordered()],
         }
+
+    def to_text(self) -> str:
+        """`to_json` as JSON text, each elite's genome as its canonical text."""
+        head = json.dumps({"descriptors": list(self.names), "bins": list(self.bins)})[:-1]
+        elites = ", ".join(
+            with_genome(
+                {"cell": list(e.cell), "values": list(e.values), "fitness": e.fitness,
+                 "generation": e.generation, "index": e.index},
+                e.genome,
+            )
+            for e in self.ordered()
+        )  # fmt: skip
+        return f'{head}, "elites": [{elites}]}}'
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> Archive:

@@ -3,14 +3,16 @@ its individuals, where each came from, and each generation's own random generato
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
+from functools import cache
 from typing import Any
 
 import numpy as np
 
 from softevo.core.ga.archive import Archive
 from softevo.core.ga.stats import GenerationStats
-from softevo.core.genome import Genome
+from softevo.core.genome import Genome, with_genome
 from softevo.core.nulls import from_nulls, to_nulls
 
 
@@ -77,6 +79,33 @@ class GAState:
             "history": [stats.to_json() for stats in self.history] if history else [],
         }
 
+    def to_text(self, history: bool = True) -> str:
+        """`to_json` as JSON text (its keys in another order), written every generation by the
+        service: each genome enters as its canonical text, computed once for its hash, instead of
+        being encoded again (encoding a population's genes cost more than the rest of a
+        generation's commit)."""
+        plain = {
+            "seed": self.seed,
+            "generation": self.generation,
+            "previous_fitness": _floats_to_json(self.previous_fitness),
+            "history": [stats.to_json() for stats in self.history] if history else [],
+        }
+        parts = [
+            json.dumps(plain)[:-1],  # without its closing brace
+            f', "current": {_individuals_text(self.current)}',
+            f', "previous": {_individuals_text(self.previous)}',
+        ]
+        if self.best is None:
+            parts.append(', "best": null')
+        else:
+            genome, fitness, generation = self.best
+            parts.append(
+                f', "best": {with_genome({"fitness": fitness, "generation": generation}, genome)}'
+            )
+        if self.archive is not None:
+            parts.append(f', "archive": {self.archive.to_text()}')
+        return "".join(parts) + "}"
+
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> GAState:
         def individuals(items: list[dict] | None) -> list[Individual] | None:
@@ -99,6 +128,23 @@ class GAState:
             history=[GenerationStats.from_json(item) for item in data.get("history", [])],
             archive=Archive.from_json(data["archive"]) if data.get("archive") else None,
         )
+
+
+@cache
+def _quoted(text: str) -> str:
+    """A string as JSON (operators: a handful of names, so each is encoded once)."""
+    return json.dumps(text)
+
+
+def _individuals_text(items: list[Individual] | None) -> str:
+    """JSON text of `[item.to_json() for item in items]` (None: null), genomes as they are."""
+    if items is None:
+        return "null"
+    return "[{}]".format(", ".join(
+        f'{{"genome": {item.genome.canonical}, "operator": {_quoted(item.operator)}, '
+        f'"parents": [{", ".join(str(int(p)) for p in item.parents)}]}}'
+        for item in items
+    ))  # fmt: skip
 
 
 def _floats_to_json(values: list[float] | None) -> list[float | None] | None:
