@@ -151,7 +151,7 @@ class VoxelEncoding(Encoding):
 
     def to_robot(self, genome: Genome, sim: SimSettings) -> VoxelRobot:
         self.check(genome)
-        labels = tuple(LABELS[g] for g in genome.discrete)
+        labels = tuple(map(LABELS.__getitem__, genome.discrete))
         return VoxelRobot(self.shape, labels, _actuation(genome.real), sim)
 
     def from_robot(self, robot: Robot) -> Genome:
@@ -209,7 +209,7 @@ class VoxelPhaseEncoding(Encoding):
         n = self.n_discrete
         a, c = genome.real[:2]
         amplitudes, phases = genome.real[2 : 2 + n], genome.real[2 + n :]
-        labels = tuple(LABELS[g] for g in genome.discrete)
+        labels = tuple(map(LABELS.__getitem__, genome.discrete))
         return VoxelRobot(self.shape, labels, Actuation(a, 0.0, c), sim, phases, amplitudes)
 
     def from_robot(self, robot: Robot) -> Genome:

@@ -14,6 +14,8 @@ from sqlalchemy import Connection
 from sqlalchemy.engine import Dialect
 from sqlalchemy.sql.dml import UpdateBase
 
+_NOTHING = object()  # no row's value
+
 
 @dataclass(frozen=True)
 class _Compiled:
@@ -24,17 +26,16 @@ class _Compiled:
     processors: tuple[tuple[int, Callable[[Any], Any]], ...]  # (position, to the driver's form)
 
     def params(
-        self, row: Mapping[str, Any], done: list[dict[int, tuple[Any, Any]]]
+        self, row: Mapping[str, Any], last: list[list[Any]]
     ) -> tuple[Any, ...] | dict[str, Any]:
-        """The row in the driver's form; `done` (per processor: the object's id -> (object, its
-        form)) lets the rows of one call convert an object they share (a timestamp) once."""
+        """The row in the driver's form; `last` (per processor: the last [object, its form])
+        lets consecutive rows that share an object (a generation's timestamp) convert it once."""
         values = [row[name] if name in row else self.fixed[name] for name in self.names]
-        for (position, process), converted in zip(self.processors, done, strict=True):
+        for (position, process), seen in zip(self.processors, last, strict=True):
             value = values[position]
-            known = converted.get(id(value))
-            if known is None or known[0] is not value:
-                known = converted[id(value)] = (value, process(value))  # keeps it alive
-            values[position] = known[1]
+            if seen[0] is not value:
+                seen[0], seen[1] = value, process(value)
+            values[position] = seen[1]
         return tuple(values) if self.positional else dict(zip(self.names, values, strict=True))
 
 
@@ -53,8 +54,8 @@ class DriverStatement:
         compiled = self._by_dialect.get(connection.dialect.name) or self._compile(
             connection.dialect
         )
-        done: list[dict[int, tuple[Any, Any]]] = [{} for _ in compiled.processors]
-        params = [compiled.params(row, done) for row in rows]
+        last: list[list[Any]] = [[_NOTHING, None] for _ in compiled.processors]
+        params = [compiled.params(row, last) for row in rows]
         result = connection.exec_driver_sql(compiled.sql, params if len(params) > 1 else params[0])
         return result.rowcount
 

@@ -9,7 +9,7 @@ Failed evaluations (NaN) are left out of best/mean/median/min/std and counted in
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -47,9 +47,10 @@ class GenerationStats:
 
     def to_json(self) -> dict[str, Any]:
         """JSON; a run without an archive has no coverage or qd_score keys."""
+        values = ((name, getattr(self, name)) for name in _FIELDS)  # all plain numbers
         return {
             k: (to_null(v) if isinstance(v, float) else v)
-            for k, v in asdict(self).items()
+            for k, v in values
             if v is not None or k not in QD_COLUMNS
         }
 
@@ -57,6 +58,9 @@ class GenerationStats:
     def from_json(cls, data: dict[str, Any]) -> GenerationStats:
         values = {k: (from_null(v) if v is None else v) for k, v in data.items()}
         return cls(**values)
+
+
+_FIELDS = tuple(field.name for field in fields(GenerationStats))
 
 
 def diversity(genomes: list[Genome]) -> float:
