@@ -24,12 +24,18 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
+from itertools import compress
 
 from softevo.core.robot import LABELS
 
 #: Label indices of the voxel encoding's genes (`softevo.core.robot.LABELS`).
 _EMPTY, _SOFT = LABELS.index("empty"), LABELS.index("soft")
 _ACTUATED = (LABELS.index("sine"), LABELS.index("neg_sine"))
+
+
+#: A label index to the binary digit of "filled" ("0" for empty), and a digit to its value.
+_FILLED_DIGIT = bytes(ord("0") if i == _EMPTY else ord("1") for i in range(256))
+_DIGIT_VALUE = bytes.maketrans(b"01", b"\x00\x01")
 
 
 @dataclass(frozen=True)
@@ -51,7 +57,7 @@ class Descriptor:
 
 
 def _fraction(body: Body, labels: tuple[int, ...]) -> float:
-    return sum(label in labels for label in body.labels) / len(body.labels)
+    return sum(body.labels.count(label) for label in labels) / len(body.labels)
 
 
 CATALOGUE: dict[str, Descriptor] = {
@@ -77,16 +83,16 @@ MEASURED = frozenset(name for name, d in CATALOGUE.items() if d.describe is None
 def body(labels: Sequence[int], box: tuple[int, int, int]) -> Body | None:
     """The body a voxel genome's labels build (None: no voxel filled, nothing to simulate)."""
     layer = box[0] * box[1]
-    filled = 0
-    for index, label in enumerate(labels):
-        if label != _EMPTY:
-            filled |= 1 << index
+    # the bit masks are made by bytes and int operations, not a Python loop over the voxels:
+    # this runs for every robot a quality-diversity run breeds
+    filled = int(bytes(labels)[::-1].translate(_FILLED_DIGIT), 2) if len(labels) else 0
     kept = largest_group(filled, box)
     if not kept:
         return None
-    indices = [i for i in range(len(labels)) if kept >> i & 1]
-    z_extent = indices[-1] // layer - indices[0] // layer + 1
-    return Body(box, tuple(labels[i] for i in indices), z_extent)
+    first, last = (kept & -kept).bit_length() - 1, kept.bit_length() - 1
+    selected = bin(kept)[:1:-1].encode().translate(_DIGIT_VALUE)  # byte i: voxel i is kept
+    z_extent = last // layer - first // layer + 1
+    return Body(box, tuple(compress(labels, selected)), z_extent)
 
 
 def largest_group(filled: int, box: tuple[int, int, int]) -> int:
