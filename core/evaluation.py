@@ -44,7 +44,7 @@ def evaluate_robot_files(robot_files: Sequence[dict[str, Any]]) -> Measures:
     objectives = [file_objective(d) for d, r in zip(robot_files, robots, strict=True) if r]
     built = [robot for robot in robots if robot is not None]
     energy = any(objective in NEEDS_ENERGY for objective in objectives)
-    results = simulate_batch(built, energy=energy) if built else []
+    results = simulate_batch(built, energy=energy, small_alone=True) if built else []
     simulated = iter(zip(results, objectives, strict=True))
     fitness: list[float | None] = []
     heading: list[float | None] = []

@@ -27,6 +27,13 @@ from softevo.core.terrain import kernel_params
 #: 4x4x4 robots keeps its arrays in a 1 MB L2 cache: 4 to 8 measured fastest, 32 about 30 %
 #: slower (bench/physics.py, BENCHMARKS.md).
 DEFAULT_LANES = 8
+#: A chunk of fewer robots than this, each of at most `SMALL_POINTS` lattice points (the paper's
+#: cube has 8, a 2x2x2 box 27), runs robot by robot in `simulate_one` when `simulate_batch` is
+#: asked to (`small_alone`): with so few robots the batched kernel's SIMD lanes stay mostly empty,
+#: and one robot at a time cost 0.4-0.8 of it per robot (BENCHMARKS.md, "Small robots"). Same
+#: bits either way.
+SMALL_WIDTH = 4
+SMALL_POINTS = 27
 
 
 @dataclass(frozen=True)
@@ -304,6 +311,13 @@ def _run_group(group: list[Mechanics], energy: bool) -> list[SimResult]:
     return results
 
 
+def _small(group: list[Mechanics]) -> bool:
+    """A chunk that `simulate_one` runs faster robot by robot (`SMALL_WIDTH`, `SMALL_POINTS`)."""
+    return len(group) < SMALL_WIDTH and all(
+        len(mech.lattice.points) <= SMALL_POINTS for mech in group
+    )
+
+
 def _group_key(mech: Mechanics) -> tuple[tuple[int, int, int], SimSettings, float]:
     return (mech.lattice.shape, mech.sim, mech.omega)
 
@@ -314,6 +328,7 @@ def simulate_batch(
     threads: int = 1,
     lanes: int = DEFAULT_LANES,
     energy: bool = False,
+    small_alone: bool = False,
 ) -> list[SimResult]:
     """Simulate many robots; results in input order.
 
@@ -321,6 +336,8 @@ def simulate_batch(
     time in the SIMD kernel; chunks run on `threads` threads (the kernel releases the GIL).
     `wall_seconds` of each result is its share of its chunk's time. `energy`: measure the
     actuators' work too (the kernel's extra loop costs time; fitness by `speed` does not need it).
+    `small_alone`: a chunk of fewer than `SMALL_WIDTH` small robots runs one robot at a time
+    (`simulate`), which is faster for them and gives the same bits.
     """
     if threads < 1 or lanes < 1:
         raise ValueError(f"threads and lanes must be >= 1, got {threads} and {lanes}")
@@ -335,7 +352,12 @@ def simulate_batch(
     results: list[SimResult | None] = [None] * len(mechs)
 
     def run(chunk: list[int]) -> None:
-        for index, result in zip(chunk, _run_group([mechs[i] for i in chunk], energy), strict=True):
+        group = [mechs[i] for i in chunk]
+        if small_alone and _small(group):
+            found = [simulate(mech, energy=energy)[0] for mech in group]
+        else:
+            found = _run_group(group, energy)
+        for index, result in zip(chunk, found, strict=True):
             results[index] = result
 
     if threads == 1 or len(chunks) == 1:
