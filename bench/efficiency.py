@@ -19,8 +19,9 @@ one after another), `paper-cube` (the 28-spring cube, 30 x G, 1000 by default), 
 box, 4x4x4, seeds 1-6 as one sweep, G generations, 40 by default: runs whose robots can share
 kernel calls when several are driven at once). Every path warms
 its kernels first (a small untimed run), and the bound is measured after the path, in the same
-invocation. `--widths` prints only the kernel's per-robot cost against the number of robots
-in one call (1, 2, 3, 5, 8). `--max-running N` sets the service's SOFTEVO_MAX_RUNNING (runs
+invocation. `--widths [PRESET[:SHAPE]]` prints only the kernel's per-robot cost against the
+number of robots in one call (1, 2, 3, 4, 5, 8) and against running them one by one.
+`--max-running N` sets the service's SOFTEVO_MAX_RUNNING (runs
 driven at once).
 """
 
@@ -35,7 +36,7 @@ import platform
 import sqlite3
 import tempfile
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -48,7 +49,7 @@ from softevo.core.evaluation import PoolEvaluator
 from softevo.core.evaluator import BatchResult, Evaluator
 from softevo.core.evolution import Evolution
 from softevo.core.genome import Genome
-from softevo.core.physics import simulate_batch
+from softevo.core.physics import simulate, simulate_batch
 from softevo.core.robot_file import parse_robot, robot_to_json
 from softevo.local_service import service_env, start_service
 
@@ -189,23 +190,35 @@ def bound(files: list[dict[str, Any]]) -> float:
     return time.perf_counter() - started
 
 
-def widths(repeats: int = 3) -> None:
-    """Per-robot cost of one kernel call against its width (robots of a 4x4x4 paper-voxel run's
-    first generation, one thread): what a generation of a few new robots pays per robot."""
-    evolution = Evolution.start(resolve({"preset": "paper-voxel", "seed": 1}))
+def widths(robot: str, repeats: int = 3) -> None:
+    """Per-robot cost of one kernel call against its width, and of the same robots one at a time
+    in `simulate_one` (robots of a run's first generation, one thread; `robot` is a preset, or
+    PRESET:SHAPE such as paper-voxel:2x2x2): what a generation of a few new robots pays per
+    robot, and where `simulate_batch(small_alone=True)` should switch."""
+    preset, _, shape = robot.partition(":")
+    request: dict[str, Any] = {"preset": preset, "seed": 1}
+    if shape:
+        request["shape"] = [int(side) for side in shape.split("x")]
+    evolution = Evolution.start(resolve(request))
     robots = [evolution.robot(item) for item in evolution.individuals()[:8]]
     simulate_batch(robots[:1])
-    print("robots in one call   seconds per robot   against 8 at once")
-    per: dict[int, float] = {}
-    for width in (8, 1, 2, 3, 5):
+    simulate(robots[0], energy=False)
+
+    def best(run: Callable[[], object], count: int) -> float:
         times = []
         for _ in range(repeats):
             started = time.perf_counter()
-            simulate_batch(robots[:width])
-            times.append((time.perf_counter() - started) / width)
-        per[width] = min(times)
-    for width in (1, 2, 3, 5, 8):
-        print(f"{width:17d} {per[width]:19.3f} {per[width] / per[8]:19.2f}")
+            run()
+            times.append((time.perf_counter() - started) / count)
+        return min(times)
+
+    batched = {w: best(lambda w=w: simulate_batch(robots[:w]), w) for w in (8, 1, 2, 3, 4, 5)}
+    alone = best(lambda: [simulate(r, energy=False) for r in robots[:4]], 4)
+    print(f"# {robot}: robot by robot (simulate_one) {alone * 1e3:.2f} ms per robot")
+    print("robots in one call   ms per robot   against 8 at once   against one by one")
+    for width in (1, 2, 3, 4, 5, 8):
+        per = batched[width]
+        print(f"{width:17d} {per * 1e3:14.2f} {per / batched[8]:19.2f} {per / alone:20.2f}")
 
 
 def main() -> None:
@@ -218,11 +231,12 @@ def main() -> None:
         "--no-bound", action="store_true", help="wall times only (to compare two trees)"
     )
     parser.add_argument(
-        "--widths", action="store_true", help="only the kernel's per-robot cost by call width"
-    )
+        "--widths", metavar="ROBOT", nargs="?", const="paper-voxel",
+        help="only the kernel's per-robot cost by call width, for PRESET[:SHAPE] robots",
+    )  # fmt: skip
     args = parser.parse_args()
     if args.widths:
-        widths()
+        widths(args.widths)
         return
     print(f"# {cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
           f"SOFTEVO_MAX_RUNNING {args.max_running or 'default'}")  # fmt: skip
