@@ -143,11 +143,11 @@ class Landed:
 class GenerationCommit:
     """What one generation's commit writes, all or nothing: its statistics (`stats`:
     GenerationStats.to_json()), the GA state after it (`state`: its JSON, or its text as
-    `EncodedJSON`), the fitness of members copied
-    from earlier generations (`cached`), batches' fitness not saved yet (`landed`), the run's
-    best (fitness, generation), the generation's wall time, and, unless the run is `done`, the
-    next generation's members (`upcoming`, as `keep_generation` takes them), so the next step
-    needs no transaction of its own to keep them."""
+    `EncodedJSON`), the fitness of members copied from earlier generations (`cached`), batches'
+    fitness not saved yet (`landed`), the run's best (fitness, generation), the generation's wall
+    time, and, unless the run is `done`, the next generation's members (`upcoming`, as
+    `keep_generation` takes them), so the next step needs no transaction of its own to keep
+    them."""
 
     stats: dict[str, Any]
     state: dict[str, Any] | EncodedJSON
