@@ -32,6 +32,7 @@ from softevo.api.store.driving import GenerationCommit, Landed, Lease, LeaseLost
 from softevo.core.config import RunConfig
 from softevo.core.evaluator import BatchResult, Evaluator
 from softevo.core.ga.algorithm import GAState, GeneticAlgorithm, Individual
+from softevo.core.ga.state import parents_text
 from softevo.core.generation import Engine, Hooks, Step
 from softevo.core.limits import BATCH_SIZE, IN_FLIGHT, SAVE_SECONDS
 from softevo.core.status import RunStatus
@@ -229,14 +230,9 @@ def members(individuals: list[Individual]) -> list[dict[str, Any]]:
     """Individuals as the store keeps them."""
     return [
         {"genome": EncodedJSON(item.genome.canonical), "genome_hash": item.genome.hash,
-         "operator": item.operator, "parents": _parents(item.parents)}
+         "operator": item.operator, "parents": EncodedJSON(parents_text(item.parents))}
         for item in individuals
     ]  # fmt: skip
-
-
-def _parents(parents: tuple[int, ...]) -> EncodedJSON:
-    """Parent indices as the JSON text `json.dumps` gives them, without its encoder."""
-    return EncodedJSON(f"[{', '.join(str(int(index)) for index in parents)}]")
 
 
 class Coordinator:

@@ -136,13 +136,18 @@ def _quoted(text: str) -> str:
     return json.dumps(text)
 
 
+def parents_text(parents: tuple[int, ...]) -> str:
+    """Parent indices as the JSON text `json.dumps` gives them, without its encoder."""
+    return f"[{', '.join(str(int(index)) for index in parents)}]"
+
+
 def _individuals_text(items: list[Individual] | None) -> str:
     """JSON text of `[item.to_json() for item in items]` (None: null), genomes as they are."""
     if items is None:
         return "null"
     return "[{}]".format(", ".join(
         f'{{"genome": {item.genome.canonical}, "operator": {_quoted(item.operator)}, '
-        f'"parents": [{", ".join(str(int(p)) for p in item.parents)}]}}'
+        f'"parents": {parents_text(item.parents)}}}'
         for item in items
     ))  # fmt: skip
 
