@@ -115,6 +115,11 @@ def batch_digest(robot_files: Sequence[dict[str, Any]]) -> str:
     return hashlib.sha256(canonical.encode()).hexdigest()[:16]
 
 
+def names_digest(names: Sequence[str]) -> str:
+    """16 hex digits naming a batch by its robots' names (`evaluate_in_batches`' `names`)."""
+    return hashlib.sha256(",".join(names).encode()).hexdigest()[:16]
+
+
 def _new_hands() -> ThreadPoolExecutor:
     """Threads are made only when none is idle: as many as batches were ever out at once."""
     return ThreadPoolExecutor(max_workers=256, thread_name_prefix="batch")
@@ -145,12 +150,16 @@ def evaluate_in_batches(
     in_flight: int = IN_FLIGHT,
     check: Callable[[], None] | None = None,
     on_batch: Callable[[list[int], BatchResult], None] | None = None,
+    names: Sequence[str] | None = None,
 ) -> np.ndarray:
     """Every file's speed (in order), evaluated in batches of at most `batch_size`, at least
     `evaluator.capacity()` of them, at most `in_flight` (and two per worker) at once, one thread
     each. `check` is called while they run (it raises to stop: batches not yet handed to the
     evaluator are dropped); `on_batch` hears of each batch as it lands (its positions in
-    `robot_files`, its result)."""
+    `robot_files`, its result). A batch's key is `key`, a dash and a digest of its content: of
+    its files' canonical JSON, or of their `names` where the caller has them (one per file, each
+    naming its content within `key`, such as a generation's genome hashes: cheaper than encoding
+    every file again)."""
     files = list(robot_files)
     fitness = np.full(len(files), np.nan)
     if not files:
@@ -167,9 +176,10 @@ def evaluate_in_batches(
         while waiting and len(out) < threads:
             batch = waiting.pop()
             chunk = [files[i] for i in batch]
-            out[_HANDS.submit(evaluator.evaluate_batch, chunk, f"{key}-{batch_digest(chunk)}")] = (
-                batch
+            digest = (
+                batch_digest(chunk) if names is None else names_digest([names[i] for i in batch])
             )
+            out[_HANDS.submit(evaluator.evaluate_batch, chunk, f"{key}-{digest}")] = batch
 
     try:
         hand_over()

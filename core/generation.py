@@ -118,6 +118,7 @@ class Engine:
             values = evaluate_in_batches(
                 evaluator, files, f"{key}-gen{generation}", batch_size=self.batch_size,
                 in_flight=self.in_flight, check=hooks.check, on_batch=landed,
+                names=[hashes[i] for i in todo],  # a robot file is its genome's, in one run
             )  # fmt: skip
             fitness.update(zip(todo, values.tolist(), strict=True))
         cache.update({hashes[index]: value for index, value in fitness.items()})
