@@ -161,6 +161,8 @@ def evaluate_in_batches(
     naming its content within `key`, such as a generation's genome hashes: cheaper than encoding
     every file again)."""
     files = list(robot_files)
+    if names is not None and len(names) != len(files):
+        raise ValueError(f"{len(names)} names for {len(files)} robot files")
     fitness = np.full(len(files), np.nan)
     if not files:
         return fitness
