@@ -14,10 +14,13 @@ import itertools
 import json
 import math
 import os
+import threading
 from abc import ABC, abstractmethod
+from collections import deque
 from collections.abc import Callable, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from queue import Empty, SimpleQueue
 from typing import Any, Self
 
 import numpy as np
@@ -153,13 +156,13 @@ def evaluate_in_batches(
     names: Sequence[str] | None = None,
 ) -> np.ndarray:
     """Every file's speed (in order), evaluated in batches of at most `batch_size`, at least
-    `evaluator.capacity()` of them, at most `in_flight` (and two per worker) at once, one thread
-    each. `check` is called while they run (it raises to stop: batches not yet handed to the
-    evaluator are dropped); `on_batch` hears of each batch as it lands (its positions in
-    `robot_files`, its result). A batch's key is `key`, a dash and a digest of its content: of
-    its files' canonical JSON, or of their `names` where the caller has them (one per file, each
-    naming its content within `key`, such as a generation's genome hashes: cheaper than encoding
-    every file again)."""
+    `evaluator.capacity()` of them, at most `in_flight` (and two per worker) at once: as many
+    threads, each handing over the next batch when its last one lands. `check` is called while
+    they run (it raises to stop: batches not yet handed to the evaluator are dropped);
+    `on_batch` hears of each batch as it lands (its positions in `robot_files`, its result). A
+    batch's key is `key`, a dash and a digest of its content: of its files' canonical JSON, or
+    of their `names` where the caller has them (one per file, each naming its content within
+    `key`, such as a generation's genome hashes: cheaper than encoding every file again)."""
     files = list(robot_files)
     if names is not None and len(names) != len(files):
         raise ValueError(f"{len(names)} names for {len(files)} robot files")
@@ -167,36 +170,51 @@ def evaluate_in_batches(
     if not files:
         return fitness
     capacity = evaluator.capacity()
-    waiting = split_evenly(range(len(files)), batch_size, capacity)
+    waiting = deque(split_evenly(range(len(files)), batch_size, capacity))
     # at most two batches per worker handed over at once: enough to keep every worker busy, and
     # when `check` stops the step (a cancel) the batches not yet handed over are dropped
     threads = max(1, min(len(waiting), in_flight, 2 * capacity))
-    waiting.reverse()  # handed over in order, from the end of the list
-    out: dict[Future[BatchResult], list[int]] = {}
+    outstanding = len(waiting)
+    landed: SimpleQueue[tuple[list[int], BatchResult | None, BaseException | None]]
+    landed = SimpleQueue()
+    stopped = threading.Event()
 
     def hand_over() -> None:
-        while waiting and len(out) < threads:
-            batch = waiting.pop()
+        """One of the call's `threads`: hands batches over in order, one at a time, until
+        none is left or the step stopped (it goes straight on to the next batch: no other
+        thread is woken for it)."""
+        while not stopped.is_set():
+            try:
+                batch = waiting.popleft()
+            except IndexError:
+                return
             chunk = [files[i] for i in batch]
             digest = (
                 batch_digest(chunk) if names is None else names_digest([names[i] for i in batch])
             )
-            out[_HANDS.submit(evaluator.evaluate_batch, chunk, f"{key}-{digest}")] = batch
+            try:
+                landed.put((batch, evaluator.evaluate_batch(chunk, f"{key}-{digest}"), None))
+            except BaseException as error:  # the step raises it; the others stop handing over
+                landed.put((batch, None, error))
+                return
 
     try:
-        hand_over()
-        while out:
+        for _ in range(threads):
+            _HANDS.submit(hand_over)
+        while outstanding:
             if check is not None:
                 check()
-            done, _ = wait(out, timeout=0.2, return_when=FIRST_COMPLETED)
-            landed = [(out.pop(future), future) for future in done]
-            hand_over()  # the next batches first: `on_batch` may write to a database
-            for batch, future in landed:
-                result = future.result()
-                if on_batch is not None:
-                    on_batch(batch, result)
-                fitness[batch] = np.asarray(result.fitness, dtype=np.float64)
+            try:
+                batch, result, error = landed.get(timeout=0.2)
+            except Empty:
+                continue
+            outstanding -= 1
+            if error is not None:
+                raise error
+            assert result is not None
+            if on_batch is not None:
+                on_batch(batch, result)
+            fitness[batch] = np.asarray(result.fitness, dtype=np.float64)
     finally:
-        for future in out:
-            future.cancel()  # not started yet (the shared threads were all busy): never will be
+        stopped.set()  # batches not handed over yet never will be
     return fitness

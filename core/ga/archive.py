@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 from softevo.core.ga.descriptors import CATALOGUE
@@ -34,9 +35,7 @@ class Elite:
     genome: Genome
 
     def beats(self, other: Elite) -> bool:
-        if self.fitness != other.fitness:
-            return self.fitness > other.fitness
-        return self.genome.hash < other.genome.hash
+        return _better(self.fitness, self.genome, other)
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -44,12 +43,29 @@ class Elite:
             "generation": self.generation, "index": self.index, "genome": self.genome.to_json(),
         }  # fmt: skip
 
+    @cached_property
+    def text(self) -> str:
+        """`to_json` as JSON text, made once: an elite is written with the run's state every
+        generation it stays an elite."""
+        return with_genome(
+            {"cell": list(self.cell), "values": list(self.values), "fitness": self.fitness,
+             "generation": self.generation, "index": self.index},
+            self.genome,
+        )  # fmt: skip
+
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> Elite:
         return cls(
             tuple(data["cell"]), tuple(float(v) for v in data["values"]), float(data["fitness"]),
             int(data["generation"]), int(data["index"]), Genome.from_json(data["genome"]),
         )  # fmt: skip
+
+
+def _better(fitness: float, genome: Genome, elite: Elite) -> bool:
+    """Strictly fitter than `elite`, or as fit with the smaller genome hash."""
+    if fitness != elite.fitness:
+        return fitness > elite.fitness
+    return genome.hash < elite.genome.hash
 
 
 @dataclass
@@ -60,14 +76,21 @@ class Archive:
     bins: tuple[int, ...]
     elites: dict[tuple[int, ...], Elite] = field(default_factory=dict)
 
+    def __post_init__(self) -> None:
+        # each descriptor's low end, range and cells, looked up once: every robot is placed
+        self._scale = tuple(
+            (CATALOGUE[name].low, CATALOGUE[name].high - CATALOGUE[name].low, bins)
+            for name, bins in zip(self.names, self.bins, strict=True)
+        )
+
     def cell(self, values: tuple[float, ...]) -> tuple[int, ...]:
         """The cell of descriptor `values` (a value on the range's top edge is in the last)."""
-        cell = []
-        for name, bins, value in zip(self.names, self.bins, values, strict=True):
-            low, high = CATALOGUE[name].low, CATALOGUE[name].high
-            position = math.floor((value - low) / (high - low) * bins)
-            cell.append(min(max(position, 0), bins - 1))
-        return tuple(cell)
+        if len(values) != len(self._scale):
+            raise ValueError(f"{len(values)} descriptor values for {len(self._scale)} descriptors")
+        return tuple(
+            min(max(math.floor((value - low) / span * bins), 0), bins - 1)
+            for (low, span, bins), value in zip(self._scale, values, strict=False)
+        )
 
     def add(
         self, values: tuple[float, ...], fitness: float, generation: int, index: int, genome: Genome
@@ -75,11 +98,11 @@ class Archive:
         """Offer a robot; True if it became its cell's elite."""
         if not values or not math.isfinite(fitness):
             return False
-        candidate = Elite(self.cell(values), values, fitness, generation, index, genome)
-        current = self.elites.get(candidate.cell)
-        if current is not None and not candidate.beats(current):
-            return False
-        self.elites[candidate.cell] = candidate
+        cell = self.cell(values)
+        current = self.elites.get(cell)
+        if current is not None and not _better(fitness, genome, current):
+            return False  # (no `Elite` made for a robot that did not get in)
+        self.elites[cell] = Elite(cell, values, fitness, generation, index, genome)
         return True
 
     def ordered(self) -> list[Elite]:
@@ -109,14 +132,7 @@ class Archive:
     def to_text(self) -> str:
         """`to_json` as JSON text, each elite's genome as its canonical text."""
         head = json.dumps({"descriptors": list(self.names), "bins": list(self.bins)})[:-1]
-        elites = ", ".join(
-            with_genome(
-                {"cell": list(e.cell), "values": list(e.values), "fitness": e.fitness,
-                 "generation": e.generation, "index": e.index},
-                e.genome,
-            )
-            for e in self.ordered()
-        )  # fmt: skip
+        elites = ", ".join(elite.text for elite in self.ordered())
         return f'{head}, "elites": [{elites}]}}'
 
     @classmethod
