@@ -144,6 +144,36 @@ def _forget_hands() -> None:
 os.register_at_fork(after_in_child=_forget_hands)
 
 
+#: What a batch thread hands back: the batch's positions, its result or what it raised.
+Landing = tuple[list[int], BatchResult | None, BaseException | None]
+
+
+def _hand_over(
+    evaluator: Evaluator,
+    files: list[dict[str, Any]],
+    names: Sequence[str] | None,
+    key: str,
+    waiting: deque[list[int]],
+    landed: SimpleQueue[Landing],
+    stopped: threading.Event,
+) -> None:
+    """One of an `evaluate_in_batches` call's threads: hands its batches over in order, one at a
+    time, until none is left or the step stopped (it goes straight on to the next batch: no
+    other thread is woken for it)."""
+    while not stopped.is_set():
+        try:
+            batch = waiting.popleft()
+        except IndexError:
+            return
+        chunk = [files[i] for i in batch]
+        digest = batch_digest(chunk) if names is None else names_digest([names[i] for i in batch])
+        try:
+            landed.put((batch, evaluator.evaluate_batch(chunk, f"{key}-{digest}"), None))
+        except BaseException as error:  # the step raises it; the others stop handing over
+            landed.put((batch, None, error))
+            return
+
+
 def evaluate_in_batches(
     evaluator: Evaluator,
     robot_files: Sequence[dict[str, Any]],
@@ -175,32 +205,11 @@ def evaluate_in_batches(
     # when `check` stops the step (a cancel) the batches not yet handed over are dropped
     threads = max(1, min(len(waiting), in_flight, 2 * capacity))
     outstanding = len(waiting)
-    landed: SimpleQueue[tuple[list[int], BatchResult | None, BaseException | None]]
-    landed = SimpleQueue()
+    landed: SimpleQueue[Landing] = SimpleQueue()
     stopped = threading.Event()
-
-    def hand_over() -> None:
-        """One of the call's `threads`: hands batches over in order, one at a time, until
-        none is left or the step stopped (it goes straight on to the next batch: no other
-        thread is woken for it)."""
-        while not stopped.is_set():
-            try:
-                batch = waiting.popleft()
-            except IndexError:
-                return
-            chunk = [files[i] for i in batch]
-            digest = (
-                batch_digest(chunk) if names is None else names_digest([names[i] for i in batch])
-            )
-            try:
-                landed.put((batch, evaluator.evaluate_batch(chunk, f"{key}-{digest}"), None))
-            except BaseException as error:  # the step raises it; the others stop handing over
-                landed.put((batch, None, error))
-                return
-
     try:
         for _ in range(threads):
-            _HANDS.submit(hand_over)
+            _HANDS.submit(_hand_over, evaluator, files, names, key, waiting, landed, stopped)
         while outstanding:
             if check is not None:
                 check()
