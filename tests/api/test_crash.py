@@ -6,11 +6,13 @@ individual stored once.
 
 from __future__ import annotations
 
+import json
 import os
 import random
 import signal
 import time
 from collections.abc import Callable, Iterator
+from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -44,6 +46,19 @@ POPULATION = REQUEST["population"]
 #: one is never a target, so the successor always has a whole generation after it to run.
 KILL_AT = 2
 LEASE_SECONDS = 2.0
+
+
+@cache
+def _undisturbed(request_text: str) -> Evolution:
+    """The run in process, serially, nothing disturbed (once per request in this process: the
+    tests below compare several servers' runs of the same two requests with it)."""
+    evolution = Evolution.start(resolve(json.loads(request_text)))
+    evolution.run(SerialEvaluator())
+    return evolution
+
+
+def undisturbed(request: dict[str, Any]) -> Evolution:
+    return _undisturbed(json.dumps(request, sort_keys=True))
 
 
 class Server:
@@ -255,8 +270,7 @@ def test_sigkill_mid_generation_then_restart_resumes_with_the_same_curve(
 
     # The learning curve is the undisturbed run's, to the last digit.
     curve = second.client.get(f"/runs/{run_id}/curve").json()["generations"]
-    evolution = Evolution.start(resolve(request_body))
-    evolution.run(SerialEvaluator())
+    evolution = undisturbed(request_body)
     expected = evolution.curve()
     assert len(curve) == len(expected) == GENERATIONS
     assert curve == expected  # every column, coverage and qd_score too for MAP-Elites
@@ -316,8 +330,7 @@ def test_sigkill_again_and_again_at_random_moments(
     )
     assert run["status"] == "completed", run
     curve = server.client.get(f"/runs/{run_id}/curve").json()["generations"]
-    evolution = Evolution.start(resolve(REQUEST))
-    evolution.run(SerialEvaluator())
+    evolution = undisturbed(REQUEST)
     assert [{c: row[c] for c in CURVE_COLUMNS} for row in curve] == [
         {c: row[c] for c in CURVE_COLUMNS} for row in evolution.curve()
     ]
@@ -413,8 +426,7 @@ def test_sigkill_inside_the_generation_commit_transaction(
         )
         assert run["status"] == "completed", run
         curve = final.client.get(f"/runs/{run_id}/curve").json()["generations"]
-        evolution = Evolution.start(resolve(REQUEST))
-        evolution.run(SerialEvaluator())
+        evolution = undisturbed(REQUEST)
         assert [{c: row[c] for c in CURVE_COLUMNS} for row in curve] == [
             {c: row[c] for c in CURVE_COLUMNS} for row in evolution.curve()
         ]

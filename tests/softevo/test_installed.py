@@ -69,7 +69,8 @@ def test_the_wheel_carries_what_reproduce_reads(installed: Path, tmp_path: Path)
     assert where.startswith(str(installed)), where  # the wheel's softevo, not the checkout's
     out = tmp_path / "out"
     done = subprocess.run(
-        [str(installed / "bin" / "softevo"), "reproduce", "--quick", "--out", str(out)],
+        [str(installed / "bin" / "softevo"), "reproduce", "--quick", "--workers", "1", "--out",
+         str(out)],
         capture_output=True, text=True, cwd=tmp_path, env=_clean_env(), timeout=600,
     )  # fmt: skip
     assert done.returncode == 0, done.stdout + done.stderr
