@@ -39,6 +39,11 @@ from softevo.core.status import RunStatus
 
 log = logging.getLogger("softevo.coordinator")
 
+#: While its looks for runs to start find none, the scheduler doubles its pause up to this many
+#: `poll_seconds` (never past a heartbeat): an idle service looks every few seconds, not twice a
+#: second. A run queued through this process, or a driver ending, wakes it at once.
+QUIET_BACKOFF = 8
+
 
 class Stop(Exception):  # noqa: N818 - a signal, not an error
     """The driver must stop: shutdown, cancellation or a lost lease."""
@@ -323,13 +328,13 @@ class Coordinator:
     # -- scheduling ----------------------------------------------------------------------------
 
     def _loop(self) -> None:
-        last_heartbeat = 0.0
+        last_heartbeat, quiet = 0.0, 0  # quiet: looks in a row that found no run to start
         while not self.stopping.is_set():
             try:
                 if time.monotonic() - last_heartbeat >= self.lease_seconds / 3:
                     self._heartbeat()
                     last_heartbeat = time.monotonic()
-                self._schedule()
+                quiet = quiet + 1 if self._schedule() == "nothing" else 0
             except (OperationalError, InterfaceError, InternalError) as error:  # next tick again
                 self.faults.record(error, "coordinator")
             except Exception:
@@ -337,8 +342,17 @@ class Coordinator:
             with self._ticked:
                 self.ticks += 1
                 self._ticked.notify_all()
-            self._wake.wait(min(self.poll_seconds, self.lease_seconds / 3))
+            if self._wake.wait(self._pause(quiet, last_heartbeat)):
+                quiet = 0
             self._wake.clear()
+
+    def _pause(self, quiet: int, last_heartbeat: float) -> float:
+        """Seconds until the next tick: `poll_seconds` (at most a third of the lease), doubled
+        for each look in a row that found nothing up to QUIET_BACKOFF times (an idle look costs
+        a query and a wake-up), but not past the next heartbeat."""
+        tick = min(self.poll_seconds, self.lease_seconds / 3)
+        heartbeat_due = last_heartbeat + self.lease_seconds / 3 - time.monotonic()
+        return min(tick * min(2 ** min(quiet, 8), QUIET_BACKOFF), max(heartbeat_due, tick))
 
     def _heartbeat(self) -> None:
         with self._lock:
@@ -347,7 +361,9 @@ class Coordinator:
             if not store.leases.renew(self.db, driver.run_id, self.owner, self.lease_seconds):
                 driver.stop("lease lost or run no longer running")
 
-    def _schedule(self) -> None:
+    def _schedule(self) -> str:
+        """Start drivers for waiting runs while this coordinator has room: "full" (no room, no
+        look), "nothing" (it looked and found no run to take), or "started"."""
         with self._lock:
             for run_id, (_driver, thread) in list(self._drivers.items()):
                 if not thread.is_alive():
@@ -355,7 +371,8 @@ class Coordinator:
             free = self.max_running - len(self._drivers)
             busy = set(self._drivers)
         if free <= 0:
-            return
+            return "full"
+        outcome = "nothing"
         for run_id in store.leases.candidates(self.db, free + len(busy)):
             if free <= 0 or self.stopping.is_set():
                 break
@@ -365,9 +382,18 @@ class Coordinator:
                 continue
             self.faults.clear()  # it took a write: the database is writable again
             driver = RunDriver(self.driving, run_id)
-            thread = threading.Thread(target=driver.run, name=f"run-{run_id}", daemon=True)
+            thread = threading.Thread(
+                target=self._drive, args=(driver,), name=f"run-{run_id}", daemon=True
+            )
             with self._lock:  # started under the lock: `join` never meets it unstarted
                 self._drivers[run_id] = (driver, thread)
                 thread.start()
-            free -= 1
+            free, outcome = free - 1, "started"
             log.info("run %s: driving (owner %s)", run_id, self.owner)
+        return outcome
+
+    def _drive(self, driver: RunDriver) -> None:
+        try:
+            driver.run()
+        finally:
+            self._wake.set()  # its slot is free: look for the next run now

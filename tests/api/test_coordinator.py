@@ -274,3 +274,32 @@ def test_a_cancel_drops_the_runs_batches_still_out(db: Database, where: str) -> 
         coordinator.stop()
     assert evaluator.dropped == [f"run{run.id}-"]
     assert store.get_run(db, run.id).status == "cancelled"
+
+
+def test_an_idle_scheduler_backs_off_but_never_past_a_heartbeat(db: Database) -> None:
+    """While its looks find no run, the pause doubles up to 8 polls; a heartbeat due sooner
+    shortens it; one overdue (the database away) is retried at the poll, not in a busy loop."""
+    now = time.monotonic()
+    coordinator = Coordinator(db, SerialEvaluator(), poll_seconds=0.5, lease_seconds=15.0)
+    assert [coordinator._pause(quiet, now) for quiet in (0, 1, 2, 3, 4, 60)] == pytest.approx(
+        [0.5, 1.0, 2.0, 4.0, 4.0, 4.0]
+    )
+    short = Coordinator(db, SerialEvaluator(), poll_seconds=0.5, lease_seconds=3.0)
+    assert 0.9 <= short._pause(3, now) <= 1.0  # the heartbeat, every second, comes first
+    assert short._pause(3, now - 100) == 0.5  # overdue: try again at the poll
+    assert coordinator._pause(0, now - 100) == 0.5
+
+
+def test_an_idle_scheduler_looks_less_often_and_a_queued_run_wakes_it(db: Database) -> None:
+    coordinator = Coordinator(db, SerialEvaluator(), poll_seconds=0.05, lease_seconds=30.0)
+    coordinator.start()
+    try:
+        assert coordinator.wait_ticks(5, 30)  # pauses of 0.05, 0.1, 0.2, 0.4, 0.4 s
+        looked = time.monotonic()
+        assert coordinator.wait_ticks(2, 30)
+        assert time.monotonic() - looked >= 0.35  # not 2 x 0.05 s: 0.4 s apart by now
+        run = store.create_run(db, resolve({**REQUEST, "generations": 1}))
+        coordinator.wake()  # what POST /runs does
+        assert wait_status(db, run.id, ("completed",), timeout=60) == "completed"
+    finally:
+        coordinator.stop()
