@@ -57,7 +57,7 @@ class Settings:
     replay_seconds: float = 600.0  # with Redis: a replay GET waits at most this for a worker
     no_worker_seconds: float = 60.0  # with Redis: a queue without a live worker this long is said
     lease_seconds: float = 15.0  # a coordinator that stops heartbeating loses its runs after this
-    poll_seconds: float = 0.5  # how often the scheduler looks for queued or orphaned runs
+    poll_seconds: float = 0.5  # how often the scheduler looks for runs (backing off while idle)
     header_seconds: float = 10.0  # a request's head (line and headers) must arrive within this
     keep_alive_seconds: float = 5.0  # an idle keep-alive connection is closed after this
     limits: Limits = field(default_factory=Limits)
