@@ -20,7 +20,6 @@ from collections import deque
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from queue import Empty, SimpleQueue
 from typing import Any, Self
 
 import numpy as np
@@ -148,13 +147,38 @@ os.register_at_fork(after_in_child=_forget_hands)
 Landing = tuple[list[int], BatchResult | None, BaseException | None]
 
 
+class _Landings:
+    """The batches of one call that landed and were not taken in yet. The step's thread is woken
+    when the last one lands or one fails, and otherwise takes in what landed every 0.2 s: not
+    woken once per batch (a wake-up costs this process more CPU than taking batches in)."""
+
+    def __init__(self, expected: int) -> None:
+        self.expected, self.arrived = expected, 0
+        self.items: list[Landing] = []
+        self.lock, self.ready = threading.Lock(), threading.Event()
+
+    def put(self, landing: Landing) -> None:
+        with self.lock:
+            self.items.append(landing)
+            self.arrived += 1
+            if landing[2] is not None or self.arrived == self.expected:
+                self.ready.set()
+
+    def take(self, timeout: float) -> list[Landing]:
+        """What landed by the time the rest is in (or one failed), or `timeout` passed."""
+        self.ready.wait(timeout)
+        with self.lock:
+            items, self.items = self.items, []
+        return items
+
+
 def _hand_over(
     evaluator: Evaluator,
     files: list[dict[str, Any]],
     names: Sequence[str] | None,
     key: str,
     waiting: deque[list[int]],
-    landed: SimpleQueue[Landing],
+    landed: _Landings,
     stopped: threading.Event,
 ) -> None:
     """One of an `evaluate_in_batches` call's threads: hands its batches over in order, one at a
@@ -189,7 +213,8 @@ def evaluate_in_batches(
     `evaluator.capacity()` of them, at most `in_flight` (and two per worker) at once: as many
     threads, each handing over the next batch when its last one lands. `check` is called while
     they run (it raises to stop: batches not yet handed to the evaluator are dropped);
-    `on_batch` hears of each batch as it lands (its positions in `robot_files`, its result). A
+    `on_batch` hears of each batch once it landed (its positions in `robot_files`, its result;
+    within 0.2 s, or at once when it is the last). A
     batch's key is `key`, a dash and a digest of its content: of its files' canonical JSON, or
     of their `names` where the caller has them (one per file, each naming its content within
     `key`, such as a generation's genome hashes: cheaper than encoding every file again)."""
@@ -205,25 +230,21 @@ def evaluate_in_batches(
     # when `check` stops the step (a cancel) the batches not yet handed over are dropped
     threads = max(1, min(len(waiting), in_flight, 2 * capacity))
     outstanding = len(waiting)
-    landed: SimpleQueue[Landing] = SimpleQueue()
-    stopped = threading.Event()
+    landed, stopped = _Landings(outstanding), threading.Event()
     try:
         for _ in range(threads):
             _HANDS.submit(_hand_over, evaluator, files, names, key, waiting, landed, stopped)
         while outstanding:
             if check is not None:
                 check()
-            try:
-                batch, result, error = landed.get(timeout=0.2)
-            except Empty:
-                continue
-            outstanding -= 1
-            if error is not None:
-                raise error
-            assert result is not None
-            if on_batch is not None:
-                on_batch(batch, result)
-            fitness[batch] = np.asarray(result.fitness, dtype=np.float64)
+            for batch, result, error in landed.take(timeout=0.2):
+                outstanding -= 1
+                if error is not None:
+                    raise error
+                assert result is not None
+                if on_batch is not None:
+                    on_batch(batch, result)
+                fitness[batch] = np.asarray(result.fitness, dtype=np.float64)
     finally:
         stopped.set()  # batches not handed over yet never will be
     return fitness
