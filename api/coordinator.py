@@ -334,7 +334,7 @@ class Coordinator:
                 if time.monotonic() - last_heartbeat >= self.lease_seconds / 3:
                     self._heartbeat()
                     last_heartbeat = time.monotonic()
-                quiet = quiet + 1 if self._schedule() == "nothing" else 0
+                quiet = min(quiet + 1, QUIET_BACKOFF) if self._schedule() == "nothing" else 0
             except (OperationalError, InterfaceError, InternalError) as error:  # next tick again
                 self.faults.record(error, "coordinator")
             except Exception:
@@ -352,7 +352,7 @@ class Coordinator:
         a query and a wake-up), but not past the next heartbeat."""
         tick = min(self.poll_seconds, self.lease_seconds / 3)
         heartbeat_due = last_heartbeat + self.lease_seconds / 3 - time.monotonic()
-        return min(tick * min(2 ** min(quiet, 8), QUIET_BACKOFF), max(heartbeat_due, tick))
+        return min(tick * min(2**quiet, QUIET_BACKOFF), max(heartbeat_due, tick))
 
     def _heartbeat(self) -> None:
         with self._lock:

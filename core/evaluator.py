@@ -214,10 +214,10 @@ def evaluate_in_batches(
     threads, each handing over the next batch when its last one lands. `check` is called while
     they run (it raises to stop: batches not yet handed to the evaluator are dropped);
     `on_batch` hears of each batch once it landed (its positions in `robot_files`, its result;
-    within 0.2 s, or at once when it is the last). A
-    batch's key is `key`, a dash and a digest of its content: of its files' canonical JSON, or
-    of their `names` where the caller has them (one per file, each naming its content within
-    `key`, such as a generation's genome hashes: cheaper than encoding every file again)."""
+    within 0.2 s, or at once when it is the last). A batch's key is `key`, a dash and a digest
+    of its content: of its files' canonical JSON, or of their `names` where the caller has them
+    (one per file, each naming its content within `key`, such as a generation's genome hashes:
+    cheaper than encoding every file again)."""
     files = list(robot_files)
     if names is not None and len(names) != len(files):
         raise ValueError(f"{len(names)} names for {len(files)} robot files")

@@ -291,7 +291,7 @@ def test_an_idle_scheduler_backs_off_but_never_past_a_heartbeat(sqlite_db: Datab
     shortens it; one overdue (the database away) is retried at the poll, not in a busy loop."""
     db, now = sqlite_db, time.monotonic()
     coordinator = Coordinator(db, SerialEvaluator(), poll_seconds=0.5, lease_seconds=15.0)
-    assert [coordinator._pause(quiet, now) for quiet in (0, 1, 2, 3, 4, 60)] == pytest.approx(
+    assert [coordinator._pause(quiet, now) for quiet in (0, 1, 2, 3, 4, 8)] == pytest.approx(
         [0.5, 1.0, 2.0, 4.0, 4.0, 4.0]
     )
     short = Coordinator(db, SerialEvaluator(), poll_seconds=0.5, lease_seconds=3.0)
