@@ -19,6 +19,19 @@ def examples() -> Path:
     return ROOT / "examples"
 
 
+def pytest_sessionstart(session: pytest.Session) -> None:
+    """Before any test starts, the main process (not each xdist worker) loads the physics
+    kernels, compiling them into numba's cache on a fresh clone. Otherwise both test processes,
+    RQ workers and `softevo serve` pools would each compile them at once, on two cores, inside
+    whichever timed test came first. (`tests/worker/test_smoke.py` times a cold compile in a
+    cache of its own.)"""
+    if hasattr(session.config, "workerinput"):
+        return
+    from softevo.core.evaluation import warm_up
+
+    warm_up()
+
+
 _FAULT_REPORTS: list[tuple[str, list[str]]] = []
 
 
