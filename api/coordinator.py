@@ -334,7 +334,7 @@ class Coordinator:
                 if time.monotonic() - last_heartbeat >= self.lease_seconds / 3:
                     self._heartbeat()
                     last_heartbeat = time.monotonic()
-                quiet = min(quiet + 1, QUIET_BACKOFF) if self._schedule() == "nothing" else 0
+                quiet = min(quiet + 1, QUIET_BACKOFF) if self._schedule() else 0
             except (OperationalError, InterfaceError, InternalError) as error:  # next tick again
                 self.faults.record(error, "coordinator")
             except Exception:
@@ -361,9 +361,9 @@ class Coordinator:
             if not store.leases.renew(self.db, driver.run_id, self.owner, self.lease_seconds):
                 driver.stop("lease lost or run no longer running")
 
-    def _schedule(self) -> str:
-        """Start drivers for waiting runs while this coordinator has room: "full" (no room, no
-        look), "nothing" (it looked and found no run to take), or "started"."""
+    def _schedule(self) -> bool:
+        """Start drivers for waiting runs while this coordinator has room; True when it looked
+        and found none to take (an idle look, after which the next one may wait longer)."""
         with self._lock:
             for run_id, (_driver, thread) in list(self._drivers.items()):
                 if not thread.is_alive():
@@ -371,8 +371,8 @@ class Coordinator:
             free = self.max_running - len(self._drivers)
             busy = set(self._drivers)
         if free <= 0:
-            return "full"
-        outcome = "nothing"
+            return False
+        idle = True
         for run_id in store.leases.candidates(self.db, free + len(busy)):
             if free <= 0 or self.stopping.is_set():
                 break
@@ -388,9 +388,9 @@ class Coordinator:
             with self._lock:  # started under the lock: `join` never meets it unstarted
                 self._drivers[run_id] = (driver, thread)
                 thread.start()
-            free, outcome = free - 1, "started"
+            free, idle = free - 1, False
             log.info("run %s: driving (owner %s)", run_id, self.owner)
-        return outcome
+        return idle
 
     def _drive(self, driver: RunDriver) -> None:
         try:

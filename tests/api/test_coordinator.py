@@ -24,7 +24,7 @@ from softevo.api.models import Base, Individual
 from softevo.core.config import resolve
 from softevo.core.evaluation import SerialEvaluator
 from softevo.core.evaluator import BatchResult
-from softevo.core.evolution import Evolution
+from tests.reference import undisturbed
 
 REQUEST = {"preset": "quick", "seed": 5, "population": 8, "generations": 4}
 
@@ -47,12 +47,6 @@ def drive(db: Database, run_id: int, evaluator: SerialEvaluator, **options: Any)
         return wait_status(db, run_id, ("completed", "failed"))
     finally:
         coordinator.stop()
-
-
-def undisturbed_curve(request: dict[str, Any]) -> list[dict[str, Any]]:
-    evolution = Evolution.start(resolve(request))
-    evolution.run(SerialEvaluator())
-    return evolution.curve()
 
 
 def test_migrations_create_exactly_the_models_schema(db: Database) -> None:
@@ -134,7 +128,7 @@ def test_takeover_after_a_coordinator_freezes_gives_the_undisturbed_curve(db: Da
         ).all()  # fmt: skip
     assert "pending" not in dict(statuses)
     assert sum(count for _, count in statuses) == 8 * 4
-    assert store.curve(db, run.id) == undisturbed_curve(REQUEST)
+    assert store.curve(db, run.id) == undisturbed(REQUEST).curve()
 
 
 def test_a_failing_evaluator_fails_the_run_with_its_reason(db: Database) -> None:
@@ -209,7 +203,7 @@ def test_quick_batches_cost_one_write_per_generation(db: Database, save_seconds:
     expected = 1 + 1 + generations + 1 + (evaluator.batches if save_seconds == 0 else 0)
     assert writes[0] == expected, (writes[0], evaluator.batches)
     assert evaluator.batches > generations  # several batches a generation were coalesced
-    assert store.curve(db, run.id) == undisturbed_curve(REQUEST)
+    assert store.curve(db, run.id) == undisturbed(REQUEST).curve()
 
 
 def test_fitness_waiting_for_its_write_is_saved_at_a_shutdown(db: Database) -> None:
@@ -237,9 +231,7 @@ def test_fitness_waiting_for_its_write_is_saved_at_a_shutdown(db: Database) -> N
     successor = Counting()
     assert drive(db, run.id, successor, batch_size=2) == "completed"
     record = store.get_run(db, run.id)
-    evolution = Evolution.start(resolve(REQUEST))
-    evolution.run(SerialEvaluator())
-    assert store.curve(db, run.id) == evolution.curve()
+    assert store.curve(db, run.id) == undisturbed(REQUEST).curve()
     assert successor.robots == record.evaluations - 6
 
 

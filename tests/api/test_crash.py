@@ -6,13 +6,11 @@ individual stored once.
 
 from __future__ import annotations
 
-import json
 import os
 import random
 import signal
 import time
 from collections.abc import Callable, Iterator
-from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -21,10 +19,9 @@ import pytest
 from sqlalchemy import Engine, create_engine, text
 
 from softevo.api.db import Database, normalise_url
-from softevo.core.config import resolve
-from softevo.core.evaluation import SerialEvaluator
-from softevo.core.evolution import CURVE_COLUMNS, Evolution
+from softevo.core.evolution import CURVE_COLUMNS
 from softevo.local_service import LocalService, ServiceError, start_service
+from tests.reference import undisturbed
 
 #: 3x3x3 robots simulated for 20 s: a batch of two takes ~0.2 s, so a generation (about eight new
 #: robots, four batches) lasts long enough to be caught between its first and last batch.
@@ -46,19 +43,6 @@ POPULATION = REQUEST["population"]
 #: one is never a target, so the successor always has a whole generation after it to run.
 KILL_AT = 2
 LEASE_SECONDS = 2.0
-
-
-@cache
-def _undisturbed(request_text: str) -> Evolution:
-    """The run in process, serially, nothing disturbed (once per request in this process: the
-    tests below compare several servers' runs of the same two requests with it)."""
-    evolution = Evolution.start(resolve(json.loads(request_text)))
-    evolution.run(SerialEvaluator())
-    return evolution
-
-
-def undisturbed(request: dict[str, Any]) -> Evolution:
-    return _undisturbed(json.dumps(request, sort_keys=True))
 
 
 class Server:

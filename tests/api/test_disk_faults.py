@@ -15,11 +15,9 @@ from typing import Any
 
 import pytest
 
-from softevo.core.config import resolve
-from softevo.core.evaluation import SerialEvaluator
-from softevo.core.evolution import Evolution
 from softevo.local_service import service_env
 from tests.api.said import said_and_survived
+from tests.reference import undisturbed
 
 pytestmark = [pytest.mark.slow, pytest.mark.fault]
 
@@ -70,15 +68,13 @@ def fill(folder: Path) -> Path:
 
 
 def test_a_full_disk_is_said_and_the_run_goes_on_after(small_disk: Path, tmp_path: Path) -> None:
-    evolution = Evolution.start(resolve(REQUEST))
-    evolution.run(SerialEvaluator())
-    undisturbed = evolution.curve()
+    reference = undisturbed(REQUEST).curve()
     env = service_env(
         database_url=f"sqlite:///{small_disk / 'softevo.db'}", api_token="t", workers="1",
         poll_seconds="0.2", lease_seconds="2",
     )  # fmt: skip
     filler: list[Path] = []
     said_and_survived(
-        env, tmp_path / "serve.log", REQUEST, undisturbed, "full",
+        env, tmp_path / "serve.log", REQUEST, reference, "full",
         lambda: filler.append(fill(small_disk)), lambda: filler.pop().unlink(), after=2,
     )  # fmt: skip
