@@ -38,13 +38,14 @@ class EncodedJSON(str):
     not encoded a second time."""
 
 
-def _dumps(value: Any) -> str:
+def encode_json(value: Any) -> str:
+    """A JSON column's text, as every write stores it."""
     return value if isinstance(value, EncodedJSON) else json.dumps(value)
 
 
 def make_engine(url: str, **kwargs: Any) -> Engine:
     url = normalise_url(url)
-    kwargs.setdefault("json_serializer", _dumps)
+    kwargs.setdefault("json_serializer", encode_json)
     if make_url(url).get_backend_name() != "sqlite":
         return create_engine(url, pool_pre_ping=True, **kwargs)
     engine = create_engine(

@@ -30,6 +30,7 @@ CURVE_FIELDS = (
 # Core tables: the driver's statements skip the ORM's per-statement work (they run several times
 # a generation, for every run this process drives).
 INDIVIDUALS, GENERATIONS, RUNS = Individual.__table__, Generation.__table__, Run.__table__
+_PENDING = IndividualStatus.PENDING.value
 
 
 @dataclass(frozen=True)
@@ -123,7 +124,15 @@ _SET_FITNESS = DriverStatement(
         eval_seconds=bindparam("b_seconds"),
         worker=bindparam("b_worker"),
         evaluated_at=bindparam("b_at"),
-    )
+    ),
+    postgres_rows=f"""
+    UPDATE individuals SET fitness = v.b_fitness, heading = v.b_heading, status = v.b_status,
+        eval_seconds = v.b_seconds, worker = v.b_worker, evaluated_at = v.b_at
+    FROM json_to_recordset(%(b_rows)s::json) AS v(b_index integer, b_fitness float8,
+        b_heading float8, b_status text, b_seconds float8, b_worker text, b_at timestamptz)
+    WHERE individuals.run_id = %(b_run)s AND individuals.generation = %(b_generation)s
+        AND individuals."index" = v.b_index AND individuals.status = '{_PENDING}'""",
+    scalars=("b_run", "b_generation"),
 )
 
 
@@ -177,6 +186,15 @@ def _fitness_rows(
     ]  # fmt: skip
 
 
+def _set_fitness(connection: Connection, rows: list[dict[str, Any]]) -> None:
+    """`_SET_FITNESS` for rows, the first of each index only: a later one for the same index
+    would find it no longer pending, as it does in a later call."""
+    first: dict[int, dict[str, Any]] = {}
+    for row in rows:
+        first.setdefault(row["b_index"], row)
+    _SET_FITNESS.execute(connection, list(first.values()))
+
+
 def save_fitness(
     db: Database, run_id: int, lease: Lease, generation: int, landed: Sequence[Landed]
 ) -> None:
@@ -184,8 +202,7 @@ def save_fitness(
     with db.writing() as connection:
         _fence(connection, run_id, lease)
         rows = _fitness_rows(run_id, generation, landed)
-        if rows:
-            _SET_FITNESS.execute(connection, rows)
+        _set_fitness(connection, rows)
 
 
 MEMBER_COLUMNS = ("genome", "genome_hash", "operator", "parents")
@@ -196,7 +213,17 @@ _INSERT_MEMBER = DriverStatement(
         run_id=bindparam("b_run"), generation=bindparam("b_generation"),
         index=bindparam("b_index"), status=IndividualStatus.PENDING.value,
         **{column: bindparam(f"b_{column}") for column in MEMBER_COLUMNS},
-    )
+    ),
+    postgres_rows=f"""
+    INSERT INTO individuals (run_id, generation, "index", status, genome, genome_hash, operator,
+                             parents)
+    SELECT %(b_run)s, %(b_generation)s, m.b_index, '{_PENDING}', m.b_genome::json,
+           m.b_genome_hash, m.b_operator, m.b_parents::json
+    FROM ROWS FROM (json_to_recordset(%(b_rows)s::json) AS (b_index integer, b_genome text,
+        b_genome_hash text, b_operator text, b_parents text)) WITH ORDINALITY
+        AS m(b_index, b_genome, b_genome_hash, b_operator, b_parents, n)
+    ORDER BY m.n""",
+    scalars=("b_run", "b_generation"),
 )  # fmt: skip
 
 
@@ -258,8 +285,7 @@ def commit_generation(db: Database, run_id: int, lease: Lease, commit: Generatio
         rows = _fitness_rows(run_id, generation, commit.landed)
         cached = [Landed(commit.cached, None, None, commit.cached_heading)]
         rows += _fitness_rows(run_id, generation, cached, IndividualStatus.CACHED)
-        if rows:
-            _SET_FITNESS.execute(connection, rows)
+        _set_fitness(connection, rows)
         at = now()
         _INSERT_GENERATION.execute(
             connection,

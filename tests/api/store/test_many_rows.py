@@ -1,0 +1,76 @@
+"""A write of many rows stores what the same rows written one at a time store, on SQLite and
+on PostgreSQL (where two rows or more go as one statement of arrays): JSON text, strings that
+need quoting in an array, NULLs, timestamps, and a repeated index (the first one wins)."""
+
+from __future__ import annotations
+
+import json
+import math
+from datetime import UTC, datetime, timedelta
+from typing import Any
+
+from sqlalchemy import Text, cast, select
+
+from softevo.api import store
+from softevo.api.db import Database
+from softevo.api.models import Individual
+from softevo.api.store.driving import _INSERT_MEMBER, MEMBER_COLUMNS, Landed
+from tests.api.store.test_store import OWNER, driven
+
+AWKWARD = ["a,b", 'q"uote', "{brace}", "back\\slash", "NULL", "", "ünï ☃", "sp ace"]
+
+
+def awkward_members() -> list[dict[str, Any]]:
+    return [
+        {"genome": {"discrete": [i, -i], "real": [0.1 * i, 1e-300], "tag": text},
+         "genome_hash": f"h{i}{text}"[:32], "operator": text[:32], "parents": [i, i + 1]}
+        for i, text in enumerate(AWKWARD)
+    ]  # fmt: skip
+
+
+def stored(db: Database, run_id: int) -> list[tuple[Any, ...]]:
+    columns = Individual.__table__.c
+    with db.read() as session:
+        rows = session.execute(
+            select(
+                columns["index"], cast(columns.genome, Text), columns.genome_hash,
+                columns.operator, cast(columns.parents, Text), columns.status, columns.fitness,
+                columns.heading, columns.eval_seconds, columns.worker,
+            )
+            .where(columns.run_id == run_id)
+            .order_by(columns["index"])
+        )  # fmt: skip
+        return [tuple(row) for row in rows]
+
+
+def test_many_rows_store_what_one_row_at_a_time_stores(db: Database) -> None:
+    landed = [
+        Landed({0: 0.5, 1: math.nan, 2: -1e-12}, 'w,"1"', 0.1, {0: 12.5, 2: math.nan}),
+        Landed({3: 2.0, 0: 9.0}, None, None),  # index 0 again: the first fitness stays
+        Landed({4: 1.0, 5: 0.0}, "w{}", 0.3, {4: -180.0}),
+    ]
+    one_by_one, at_once = driven(db), driven(db)
+    with db.writing() as connection:  # the members one statement each
+        for index, member in enumerate(awkward_members()):
+            row = {"b_run": one_by_one, "b_generation": 0, "b_index": index}
+            row |= {f"b_{column}": member[column] for column in MEMBER_COLUMNS}
+            _INSERT_MEMBER.execute(connection, [row])
+    store.driving.keep_generation(db, at_once, OWNER, 0, awkward_members())
+    for batch in landed:
+        for index, value in batch.fitness.items():
+            single = Landed({index: value}, batch.worker, batch.seconds_each, batch.heading)
+            store.driving.save_fitness(db, one_by_one, OWNER, 0, [single])
+    store.driving.save_fitness(db, at_once, OWNER, 0, landed)
+
+    rows = stored(db, at_once)
+    assert rows == stored(db, one_by_one)
+    assert [json.loads(row[1])["tag"] for row in rows] == AWKWARD
+    assert rows[0][5:] == ("evaluated", 0.5, 12.5, 0.1, 'w,"1"')
+    assert rows[1][5:7] == ("failed", None)
+    assert rows[6][5:] == ("pending", None, None, None, None)
+    with db.read() as session:  # one timestamp for the call, read back as UTC
+        times = set(session.scalars(select(Individual.evaluated_at).where(
+            Individual.run_id == at_once, Individual.status != "pending")))  # fmt: skip
+    (when,) = times
+    assert when.utcoffset() == timedelta(0)
+    assert abs(datetime.now(UTC) - when) < timedelta(minutes=1)
