@@ -47,7 +47,9 @@ class _Compiled:
             values[position] = seen[1]
         return tuple(values) if self.positional else dict(zip(self.names, values, strict=True))
 
-    def recordset(self, rows: Sequence[Mapping[str, Any]], scalars: tuple[str, ...]) -> dict:
+    def recordset(
+        self, rows: Sequence[Mapping[str, Any]], scalars: tuple[str, ...]
+    ) -> dict[str, Any]:
         """The rows as `postgres_rows` takes them: `b_rows`, one JSON text of every row's
         values but the `scalars` (JSON columns' values as their text, timestamps in ISO form),
         and each scalar's one value."""

@@ -1,6 +1,7 @@
 """A write of many rows stores what the same rows written one at a time store, on SQLite and
-on PostgreSQL (where two rows or more go as one statement of arrays): JSON text, strings that
-need quoting in an array, NULLs, timestamps, and a repeated index (the first one wins)."""
+on PostgreSQL (where two rows or more go as one statement that reads them from one JSON text):
+JSON columns' text, strings that need escaping, NULLs, timestamps, and a repeated index (the
+first one wins)."""
 
 from __future__ import annotations
 
