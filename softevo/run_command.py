@@ -20,7 +20,7 @@ from softevo.core.ga.descriptors import CATALOGUE
 from softevo.core.objectives import OBJECTIVES
 from softevo.library import Result, Run
 from softevo.results import (
-    append_population,
+    Checkpoints,
     read_results,
     read_resumable,
     write_archive,
@@ -28,8 +28,8 @@ from softevo.results import (
 )
 
 DESCRIPTION = (
-    "Evolve robots in this process with a live progress bar. After every generation "
-    "the output folder gets config.json, curve.csv, curve.json, best_robot.json, "
+    "Evolve robots in this process with a live progress bar. While it runs (at least "
+    "every second, and when it ends or is stopped) the output folder gets config.json, curve.csv, curve.json, best_robot.json, "
     "state.json, cache.json and population.csv, and at the end curve.png, "
     "population.png and diversity.png; Ctrl-C stops, keeps them and draws the figures "
     "of the generations done. The default folder is named by the config "
@@ -226,6 +226,7 @@ def run_command(args: argparse.Namespace) -> int:
         ),
         TimeRemainingColumn(),
     )
+    checkpoints = Checkpoints(out, evolution)
     try:
         with Progress(*columns, console=console, transient=args.json) as progress:
             done = len(evolution.state.history)
@@ -234,8 +235,7 @@ def run_command(args: argparse.Namespace) -> int:
             )
 
             def report(update: Any) -> None:
-                write_results(out, evolution)
-                append_population(out, evolution)
+                checkpoints.done()
                 progress.update(
                     task,
                     completed=update.stats.generation + 1,
@@ -245,6 +245,7 @@ def run_command(args: argparse.Namespace) -> int:
 
             result = Run(evolution, args.workers).finish(on_generation=report)
     except KeyboardInterrupt:
+        checkpoints.flush()
         done = len(evolution.state.history)
         if done:
             _figures(out, evolution)
