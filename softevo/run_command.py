@@ -29,7 +29,8 @@ from softevo.results import (
 
 DESCRIPTION = (
     "Evolve robots in this process with a live progress bar. While it runs (at least "
-    "every second, and when it ends or is stopped) the output folder gets config.json, curve.csv, curve.json, best_robot.json, "
+    "every second, and when it ends or is stopped) the output folder gets config.json, "
+    "curve.csv, curve.json, best_robot.json, "
     "state.json, cache.json and population.csv, and at the end curve.png, "
     "population.png and diversity.png; Ctrl-C stops, keeps them and draws the figures "
     "of the generations done. The default folder is named by the config "
