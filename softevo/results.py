@@ -90,22 +90,22 @@ class Checkpoints:
 
     def __init__(self, out: Path, evolution: Evolution, seconds: float = SAVE_SECONDS) -> None:
         self.out, self.seconds = out, seconds
-        self.whole: Evolution | None = None  # the last generation's run, if not written yet
+        self.whole: Evolution | None = None  # the last whole generation's run, until written
         self.written = time.monotonic()
         self.evolution = evolution
 
     def done(self) -> None:
         append_population(self.out, self.evolution)
+        # the run as it is now (a step replaces its state and counters, and adds to its cache
+        # and headings in place), kept until written: an interrupt during the write leaves it
+        # to `flush`
+        evolution = self.evolution
+        self.whole = replace(
+            evolution, cache=dict(evolution.cache), headings=dict(evolution.headings)
+        )
         if time.monotonic() - self.written >= self.seconds:
-            self.whole = None
-            write_results(self.out, self.evolution)
+            self.flush()
             self.written = time.monotonic()
-        else:  # as it is now: a step replaces the run's state and counters, and adds to its
-            # cache and headings in place
-            evolution = self.evolution
-            self.whole = replace(
-                evolution, cache=dict(evolution.cache), headings=dict(evolution.headings)
-            )
 
     def flush(self) -> None:
         if self.whole is not None:
