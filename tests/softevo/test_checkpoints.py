@@ -8,6 +8,9 @@ import csv
 import json
 from pathlib import Path
 
+import pytest
+
+from softevo import results
 from softevo.core.config import resolve
 from softevo.core.evaluation import SerialEvaluator
 from softevo.core.evolution import Evolution
@@ -57,3 +60,23 @@ def test_due_checkpoints_write_every_file(tmp_path: Path) -> None:
     assert json.loads((tmp_path / "cache.json").read_text())["generation"] == 1
     checkpoints.flush()  # nothing newer to write
     assert json.loads((tmp_path / "state.json").read_text())["generation"] == 1
+
+
+def test_an_interrupt_during_a_write_leaves_the_whole_generation_to_flush(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    evolution = Evolution.start(resolve(CONFIG))
+    checkpoints = Checkpoints(tmp_path, evolution, seconds=0.0)
+    evolution.step(SerialEvaluator())
+
+    def interrupted(out: Path, run: Evolution) -> None:
+        (out / "cache.json").write_text('{"generation": -1}')  # half a write
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(results, "write_results", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        checkpoints.done()
+    monkeypatch.undo()
+    checkpoints.flush()
+    assert json.loads((tmp_path / "cache.json").read_text())["generation"] == 1
+    assert read_resumable(tmp_path).state.generation == 1
