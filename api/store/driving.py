@@ -115,7 +115,7 @@ _SET_FITNESS = DriverStatement(
         INDIVIDUALS.c.run_id == bindparam("b_run"),
         INDIVIDUALS.c.generation == bindparam("b_generation"),
         INDIVIDUALS.c["index"] == bindparam("b_index"),
-        INDIVIDUALS.c.status == IndividualStatus.PENDING.value,  # never a second fitness
+        INDIVIDUALS.c.status == _PENDING,  # never a second fitness
     )
     .values(
         fitness=bindparam("b_fitness"),
@@ -211,7 +211,7 @@ _INSERT_MEMBER = DriverStatement(
     .inline()
     .values(
         run_id=bindparam("b_run"), generation=bindparam("b_generation"),
-        index=bindparam("b_index"), status=IndividualStatus.PENDING.value,
+        index=bindparam("b_index"), status=_PENDING,
         **{column: bindparam(f"b_{column}") for column in MEMBER_COLUMNS},
     ),
     postgres_rows=f"""

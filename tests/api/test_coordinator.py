@@ -6,8 +6,7 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Iterator, Sequence
-from pathlib import Path
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -269,19 +268,15 @@ def test_a_cancel_drops_the_runs_batches_still_out(db: Database, where: str) -> 
     assert store.get_run(db, run.id).status == "cancelled"
 
 
-@pytest.fixture
-def sqlite_db(tmp_path: Path) -> Iterator[Database]:
-    """A database of the test's own, for what does not depend on which database it is."""
-    database = Database(f"sqlite:///{tmp_path / 'idle.db'}")
-    database.upgrade()
-    yield database
-    database.dispose()
+#: For what does not depend on which database it is: the `db` fixture on SQLite only.
+ON_SQLITE = pytest.mark.parametrize("database_url", ["sqlite"], indirect=True)
 
 
-def test_an_idle_scheduler_backs_off_but_never_past_a_heartbeat(sqlite_db: Database) -> None:
+@ON_SQLITE
+def test_an_idle_scheduler_backs_off_but_never_past_a_heartbeat(db: Database) -> None:
     """While its looks find no run, the pause doubles up to 8 polls; a heartbeat due sooner
     shortens it; one overdue (the database away) is retried at the poll, not in a busy loop."""
-    db, now = sqlite_db, time.monotonic()
+    now = time.monotonic()
     coordinator = Coordinator(db, SerialEvaluator(), poll_seconds=0.5, lease_seconds=15.0)
     assert [coordinator._pause(quiet, now) for quiet in (0, 1, 2, 3, 4, 8)] == pytest.approx(
         [0.5, 1.0, 2.0, 4.0, 4.0, 4.0]
@@ -292,10 +287,8 @@ def test_an_idle_scheduler_backs_off_but_never_past_a_heartbeat(sqlite_db: Datab
     assert coordinator._pause(0, now - 100) == 0.5
 
 
-def test_an_idle_scheduler_looks_less_often_and_a_queued_run_wakes_it(
-    sqlite_db: Database,
-) -> None:
-    db = sqlite_db
+@ON_SQLITE
+def test_an_idle_scheduler_looks_less_often_and_a_queued_run_wakes_it(db: Database) -> None:
     coordinator = Coordinator(db, SerialEvaluator(), poll_seconds=0.05, lease_seconds=30.0)
     coordinator.start()
     try:
