@@ -176,7 +176,7 @@ def _fitness_rows(
     at = now()
     return [
         {"b_run": run_id, "b_generation": generation, "b_index": index,
-         "b_fitness": to_null(value), "b_seconds": batch.seconds_each,
+         "b_fitness": to_null(value), "b_seconds": to_null(batch.seconds_each),
          "b_heading": to_null(batch.heading.get(index, math.nan)),
          "b_worker": None if batch.worker is None else batch.worker[:128], "b_at": at,
          "b_status": (status or (IndividualStatus.EVALUATED if to_null(value) is not None

@@ -75,3 +75,14 @@ def test_many_rows_store_what_one_row_at_a_time_stores(db: Database) -> None:
     (when,) = times
     assert when.utcoffset() == timedelta(0)
     assert abs(datetime.now(UTC) - when) < timedelta(minutes=1)
+
+
+def test_a_seconds_figure_that_is_not_finite_is_stored_as_null(db: Database) -> None:
+    """NaN is null in every column (`softevo.core.nulls`): a worker's odd timing neither fails
+    the write (PostgreSQL's rows go as JSON, which has no NaN) nor is stored as a number."""
+    run_id = driven(db)
+    store.driving.keep_generation(db, run_id, OWNER, 0, awkward_members())
+    store.driving.save_fitness(db, run_id, OWNER, 0, [Landed({0: 0.5, 1: 0.25}, "w", math.nan)])
+    rows = stored(db, run_id)
+    assert [row[5:9] for row in rows[:2]] == [("evaluated", 0.5, None, None),
+                                              ("evaluated", 0.25, None, None)]  # fmt: skip
