@@ -71,7 +71,7 @@ class RunDriver(Hooks):
         self.db = driving.db
         self.run_id = run_id
         self.key = f"run{run_id}"  # every batch key of the run starts with it and a dash
-        self.abort = threading.Event()
+        self.abort, self.alarm = threading.Event(), threading.Event()  # alarm: wakes the step
         self.reason = ""
         self.landed: list[Landed] = []  # batches' fitness not written yet
         self.kept: int | None = None  # the generation this driver's last commit kept
@@ -83,16 +83,19 @@ class RunDriver(Hooks):
     def stop(self, reason: str) -> None:
         self.reason = reason
         self.abort.set()
+        self.alarm.set()
 
-    def check(self) -> None:
-        """Called every 0.2 s while batches run: stops the step, or writes fitness that has
-        waited `save_seconds` for a write (so none waits longer, however slow the rest)."""
+    def check(self) -> float:
+        """Called while batches run (at once when `alarm` rings): stops the step, or writes
+        fitness that has waited `save_seconds` for a write. A batch landing from the time it
+        returns on is written at once (so none waits longer, however slow the rest)."""
         if self.abort.is_set():
             raise Stop(self.reason)
         if self.driving.stopping.is_set():
             raise Stop("shutdown")
         if self.landed and self.generation is not None and self._due():
             self._save(self.generation)
+        return self.written + self.driving.save_seconds
 
     # -- the hooks of the generation step -------------------------------------------------------
 
@@ -102,10 +105,7 @@ class RunDriver(Hooks):
         if generation == self.kept:  # kept by this driver's last commit, nothing evaluated since
             return {}, {}
         self.written = time.monotonic()
-        return self._fenced(
-            store.driving.keep_generation, self.db, self.run_id, self.driving.lease, generation,
-            members(individuals),
-        )  # fmt: skip
+        return self._fenced(store.driving.keep_generation, generation, members(individuals))
 
     def batch(self, generation: int, indices: list[int], result: BatchResult) -> None:
         fitness = dict(zip(indices, result.fitness.tolist(), strict=True))
@@ -122,14 +122,12 @@ class RunDriver(Hooks):
         """Write the fitness that landed and waits (one statement for all its batches)."""
         landed, self.landed = self.landed, []
         self.written = time.monotonic()
-        self._fenced(
-            store.driving.save_fitness, self.db, self.run_id, self.driving.lease, generation,
-            landed,
-        )  # fmt: skip
+        self._fenced(store.driving.save_fitness, generation, landed)
 
     def _fenced(self, write, *args):  # type: ignore[no-untyped-def]
+        """`write(db, run, lease, *args)`; a lost lease stops the driver."""
         try:
-            return write(*args)
+            return write(self.db, self.run_id, self.driving.lease, *args)
         except LeaseLostError as lost:
             self.stop(str(lost))
             raise Stop(self.reason) from None
@@ -225,8 +223,7 @@ class RunDriver(Hooks):
             upcoming=members(upcoming),
         )
         self.landed, self.written = [], time.monotonic()
-        self._fenced(store.driving.commit_generation, self.db, self.run_id, self.driving.lease,
-                     commit)  # fmt: skip
+        self._fenced(store.driving.commit_generation, commit)
         self.kept = step.stats.generation + 1 if upcoming else None
         self.driving.faults.clear()  # a generation committed: the database takes writes
 
@@ -287,8 +284,10 @@ class Coordinator:
         if self._thread is not None:
             self._thread.join(timeout)
         with self._lock:
-            threads = [thread for _driver, thread in self._drivers.values()]
-        for thread in threads:
+            drivers = list(self._drivers.values())
+        for driver, _thread in drivers:
+            driver.alarm.set()  # a driver waiting on batches stops now
+        for _driver, thread in drivers:
             thread.join(timeout)
         try:
             store.leases.release_all(self.db, self.owner)

@@ -15,6 +15,7 @@ import json
 import math
 import os
 import threading
+import time
 from abc import ABC, abstractmethod
 from collections import deque
 from collections.abc import Callable, Sequence
@@ -143,30 +144,58 @@ def _forget_hands() -> None:
 os.register_at_fork(after_in_child=_forget_hands)
 
 
+#: Longest the step's thread waits between calls of `check` while batches run, when nothing
+#: (the last batch, a due one, the caller's alarm) wakes it sooner.
+CHECK_SECONDS = 1.0
+
 #: What a batch thread hands back: the batch's positions, its result or what it raised.
 Landing = tuple[list[int], BatchResult | None, BaseException | None]
 
 
 class _Landings:
     """The batches of one call that landed and were not taken in yet. The step's thread is woken
-    when the last one lands or one fails, and otherwise takes in what landed every 0.2 s: not
-    woken once per batch (a wake-up costs this process more CPU than taking batches in)."""
+    when the last one lands or one fails, when one lands once the caller wants batches at once
+    (`due`, a `time.monotonic()`: to save them), or by the caller's `alarm` (a stop); otherwise
+    it sleeps up to CHECK_SECONDS: a wake-up costs this process more CPU than taking batches in."""
 
-    def __init__(self, expected: int) -> None:
-        self.expected, self.arrived = expected, 0
+    def __init__(self, expected: int, alarm: threading.Event | None) -> None:
+        self.expected, self.arrived, self.failed = expected, 0, False
         self.items: list[Landing] = []
-        self.lock, self.ready = threading.Lock(), threading.Event()
+        self.due: float | None = None
+        self.lock = threading.Lock()
+        self.ready = threading.Event() if alarm is None else alarm
+        self.ready.clear()  # a stop that came before is seen by the `check` that comes first
 
     def put(self, landing: Landing) -> None:
         with self.lock:
             self.items.append(landing)
             self.arrived += 1
-            if landing[2] is not None or self.arrived == self.expected:
+            self.failed = self.failed or landing[2] is not None
+            if self._finished() or (self.due is not None and time.monotonic() >= self.due):
                 self.ready.set()
 
-    def take(self, timeout: float) -> list[Landing]:
-        """What landed by the time the rest is in (or one failed), or `timeout` passed."""
-        self.ready.wait(timeout)
+    def _finished(self) -> bool:
+        return self.failed or self.arrived == self.expected
+
+    def take(self, due: float | None) -> list[Landing]:
+        """What landed, once the rest is in (or one failed) or once `due` passed (None: only at
+        the end); [] when the alarm rang or CHECK_SECONDS passed before."""
+        with self.lock:
+            self.due, wait = due, CHECK_SECONDS
+            if self.items and due is not None:
+                wait = min(wait, max(0.0, due - time.monotonic()))
+        self.ready.wait(wait)
+        with self.lock:
+            finished = self._finished()
+            if not finished:  # (a stop that rings now is seen by the next `check`)
+                self.ready.clear()
+            if not finished and (due is None or time.monotonic() < due):
+                return []
+            items, self.items = self.items, []
+        return items
+
+    def drain(self) -> list[Landing]:
+        """Whatever landed, at once."""
         with self.lock:
             items, self.items = self.items, []
         return items
@@ -205,19 +234,22 @@ def evaluate_in_batches(
     *,
     batch_size: int = BATCH_SIZE,
     in_flight: int = IN_FLIGHT,
-    check: Callable[[], None] | None = None,
+    check: Callable[[], float | None] | None = None,
     on_batch: Callable[[list[int], BatchResult], None] | None = None,
     names: Sequence[str] | None = None,
+    alarm: threading.Event | None = None,
 ) -> np.ndarray:
     """Every file's speed (in order), evaluated in batches of at most `batch_size`, at least
     `evaluator.capacity()` of them, at most `in_flight` (and two per worker) at once: as many
     threads, each handing over the next batch when its last one lands. `check` is called while
-    they run (it raises to stop: batches not yet handed to the evaluator are dropped);
-    `on_batch` hears of each batch once it landed (its positions in `robot_files`, its result;
-    within 0.2 s, or at once when it is the last). A batch's key is `key`, a dash and a digest
-    of its content: of its files' canonical JSON, or of their `names` where the caller has them
-    (one per file, each naming its content within `key`, such as a generation's genome hashes:
-    cheaper than encoding every file again)."""
+    they run, at least every CHECK_SECONDS and at once when another thread sets `alarm`: it
+    raises to stop (batches not yet handed to the evaluator are dropped; those that landed are
+    given to `on_batch` first), or returns the `time.monotonic()` from which `on_batch` should
+    hear of a batch as soon as it lands (None: at the end is soon enough). `on_batch` hears of
+    each batch (its positions in `robot_files`, its result) by then, or at the end. A batch's
+    key is `key`, a dash and a digest of its content: of its files' canonical JSON, or of their
+    `names` where the caller has them (one per file, each naming its content within `key`, such
+    as a generation's genome hashes: cheaper than encoding every file again)."""
     files = list(robot_files)
     if names is not None and len(names) != len(files):
         raise ValueError(f"{len(names)} names for {len(files)} robot files")
@@ -230,14 +262,13 @@ def evaluate_in_batches(
     # when `check` stops the step (a cancel) the batches not yet handed over are dropped
     threads = max(1, min(len(waiting), in_flight, 2 * capacity))
     outstanding = len(waiting)
-    landed, stopped = _Landings(outstanding), threading.Event()
+    landed, stopped = _Landings(outstanding, alarm), threading.Event()
     try:
         for _ in range(threads):
             _HANDS.submit(_hand_over, evaluator, files, names, key, waiting, landed, stopped)
         while outstanding:
-            if check is not None:
-                check()
-            for batch, result, error in landed.take(timeout=0.2):
+            due = None if check is None else check()
+            for batch, result, error in landed.take(due):
                 outstanding -= 1
                 if error is not None:
                     raise error
@@ -245,6 +276,12 @@ def evaluate_in_batches(
                 if on_batch is not None:
                     on_batch(batch, result)
                 fitness[batch] = np.asarray(result.fitness, dtype=np.float64)
+    except BaseException:
+        if on_batch is not None:  # a stop: what landed is not lost with the step
+            for batch, result, _error in landed.drain():
+                if result is not None:
+                    on_batch(batch, result)
+        raise
     finally:
         stopped.set()  # batches not handed over yet never will be
     return fitness

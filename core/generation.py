@@ -11,8 +11,10 @@ before a crash) is counted as evaluated but not simulated again.
 
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -29,8 +31,15 @@ from softevo.core.settings import SimSettings
 class Hooks:
     """What happens around a step (persistence, cancellation); by default nothing."""
 
-    def check(self) -> None:
-        """Raise to stop the step (cancelled, lease lost, shutdown); called while batches run."""
+    #: Set by another thread to have `check` called at once (a stop); without one, `check` is
+    #: called at least every `evaluator.CHECK_SECONDS` while batches run.
+    alarm: threading.Event | None = None
+
+    def check(self) -> float | None:
+        """Raise to stop the step (cancelled, lease lost, shutdown); called while batches run.
+        Returns the `time.monotonic()` from which a batch that lands goes to `batch` at once
+        (None: at the step's end is soon enough)."""
+        return None
 
     def individuals(
         self, generation: int, individuals: list[Individual]
@@ -73,10 +82,15 @@ class Engine:
     def encoding(self) -> Encoding:
         return self.algorithm.encoding
 
+    @cached_property
+    def sim_json(self) -> dict[str, Any]:
+        """The run's simulation settings as every robot file holds them, dumped once."""
+        return self.sim.model_dump()
+
     def robot_file(self, individual: Individual) -> dict[str, Any]:
         """The individual's robot file; one measured by another objective than `speed` says so
         (a `speed` file stays as it always was, so are its batch keys)."""
-        document = robot_to_json(self.encoding.to_robot(individual.genome, self.sim))
+        document = robot_to_json(self.encoding.to_robot(individual.genome, self.sim), self.sim_json)
         if self.objective != "speed":
             document["objective"] = self.objective
         return document
@@ -117,7 +131,7 @@ class Engine:
 
             values = evaluate_in_batches(
                 evaluator, files, f"{key}-gen{generation}", batch_size=self.batch_size,
-                in_flight=self.in_flight, check=hooks.check, on_batch=landed,
+                in_flight=self.in_flight, check=hooks.check, on_batch=landed, alarm=hooks.alarm,
                 names=[hashes[i] for i in todo],  # a robot file is its genome's, in one run
             )  # fmt: skip
             fitness.update(zip(todo, values.tolist(), strict=True))

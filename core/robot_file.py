@@ -248,8 +248,10 @@ def _refuse_constant(name: str) -> float:
     raise ValueError(f"non-finite number {name} is not allowed")
 
 
-def robot_to_json(robot: Robot) -> dict[str, Any]:
-    """The robot file of `robot`, with the full simulation settings it is simulated under."""
+def robot_to_json(robot: Robot, sim: dict[str, Any] | None = None) -> dict[str, Any]:
+    """The robot file of `robot`, with the full simulation settings it is simulated under: `sim`
+    where the caller already holds `robot.sim.model_dump()` (a run's robot files share it, and
+    nothing changes a robot file once made), else dumped here."""
     document: dict[str, Any] = {"format": FORMAT, "shape": list(robot.shape)}
     if isinstance(robot, VoxelRobot):
         document["voxels"] = list(robot.voxels)
@@ -270,7 +272,7 @@ def robot_to_json(robot: Robot) -> dict[str, Any]:
     else:
         document["voxels"] = ["filled" if f else "empty" for f in robot.filled]
         document["springs"] = np.asarray(robot.springs, dtype=np.float64).tolist()
-    document["sim"] = robot.sim.model_dump()
+    document["sim"] = robot.sim.model_dump() if sim is None else sim
     return document
 
 
