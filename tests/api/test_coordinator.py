@@ -20,6 +20,7 @@ from softevo.api import store
 from softevo.api.coordinator import Coordinator
 from softevo.api.db import Database
 from softevo.api.models import Base, Individual
+from softevo.core import evaluator as batches
 from softevo.core.config import resolve
 from softevo.core.evaluation import SerialEvaluator
 from softevo.core.evaluator import BatchResult
@@ -205,18 +206,24 @@ def test_quick_batches_cost_one_write_per_generation(db: Database, save_seconds:
     assert store.curve(db, run.id) == undisturbed(REQUEST).curve()
 
 
-def test_fitness_waiting_for_its_write_is_saved_at_a_shutdown(db: Database) -> None:
+def test_fitness_waiting_for_its_write_is_saved_at_a_shutdown(
+    db: Database, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """Three batches of generation 0 land and wait (a minute's `save_seconds`), the fourth hangs;
     a clean shutdown saves the three, and the successor evaluates only the rest."""
+    landings, put = threading.Semaphore(0), batches._Landings.put
+
+    def put_and_count(self: batches._Landings, landing: batches.Landing) -> None:
+        put(self, landing)
+        landings.release()
+
+    monkeypatch.setattr(batches._Landings, "put", put_and_count)
     run = store.create_run(db, resolve(REQUEST))
     frozen = FreezingEvaluator(calls=3)
     first = Coordinator(db, frozen, batch_size=2, save_seconds=60.0, poll_seconds=0.05)
     first.start()
     frozen.wait_frozen()
-    driver = first._drivers[run.id][0]
-    deadline = time.monotonic() + 10  # the third batch returned; wait until its fitness landed
-    while sum(len(b.fitness) for b in driver.landed) < 6 and time.monotonic() < deadline:
-        time.sleep(0.01)
+    assert all(landings.acquire(timeout=10) for _ in range(3))  # landed in the step, unsaved
     first.stop()
     frozen.release.set()
     with db.read() as session:
