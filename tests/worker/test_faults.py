@@ -386,8 +386,8 @@ def test_only_worker_killed_then_a_new_one_started_later(
     service.wait_for_fitness(run_id)
     caught = kill_mid_job(service.redis, workers, {"b1"})
     killed = time.monotonic()
-    # fitness that landed just before the kill may wait SAVE_SECONDS for its write (and the
-    # driver's next 0.2 s check): what is saved once that has passed must then stay as it is
+    # fitness that landed just before the kill may wait SAVE_SECONDS for its write: what is
+    # saved once that has passed must then stay as it is
     time.sleep(SAVE_SECONDS + 0.5)
     before = service.run(run_id)["progress"]
     saved = [i for i in service.individuals(run_id) if i["status"] != "pending"]
