@@ -27,6 +27,20 @@ def test_two_point_crossover_takes_genes_only_from_parents_at_the_cuts(seed: int
     np.testing.assert_array_equal(second, np.concatenate([b[:i], a[i:j], b[j:]]))
 
 
+@given(seeds, st.sampled_from([2, 3, 5, 28, 64, 131, 20_000]), st.integers(0, 3))
+def test_cut_points_are_drawn_as_numpy_choice_draws_them(seed: int, n: int, before: int) -> None:
+    """The same points and the same generator state after as `np.sort(rng.choice(n + 1, 2,
+    replace=False))`, which bred every curve so far (`before` draws first, some leaving half of
+    a 64-bit draw buffered)."""
+    ours, numpy = np.random.default_rng(seed), np.random.default_rng(seed)
+    for rng in (ours, numpy):
+        for _ in range(before):
+            rng.integers(0, 7)
+    expected = tuple(int(v) for v in np.sort(numpy.choice(n + 1, size=2, replace=False)))
+    assert operators.two_cut_points(n, ours) == expected
+    assert ours.bit_generator.state == numpy.bit_generator.state
+
+
 def test_two_point_crossover_cut_points_cover_every_position() -> None:
     rng = np.random.default_rng(0)
     cuts = {operators.two_point_crossover(np.zeros(5), np.ones(5), rng)[2] for _ in range(2000)}
