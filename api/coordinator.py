@@ -86,15 +86,14 @@ class RunDriver(Hooks):
         self.alarm.set()
 
     def check(self) -> float:
-        """Called while batches run (at once when `alarm` rings): stops the step, or writes
-        fitness that has waited `save_seconds` for a write. A batch landing from the time it
-        returns on is written at once (so none waits longer, however slow the rest)."""
+        """Called while batches run (at once when `alarm` rings): stops the step, or says when
+        the run's next write is due; a batch landing from then on is handed to `batch` and
+        written at once (so no fitness waits longer than `save_seconds`, however slow the
+        rest)."""
         if self.abort.is_set():
             raise Stop(self.reason)
         if self.driving.stopping.is_set():
             raise Stop("shutdown")
-        if self.landed and self.generation is not None and self._due():
-            self._save(self.generation)
         return self.written + self.driving.save_seconds
 
     # -- the hooks of the generation step -------------------------------------------------------
