@@ -222,7 +222,7 @@ def test_a_running_run_updates_live(page: Any, server: httpx.Client, runs: dict[
     assert drawn == list(range(len(drawn)))
     # the run's own Cancel button stops it
     page.click("#summary button:has-text('Cancel')")
-    wait(lambda: server.get(f"/runs/{run_id}").json()["status"] == "cancelled", 15, "cancelled")
+    wait(lambda: server.get(f"/runs/{run_id}").json()["status"] == "cancelled", 30, "cancelled")
     page.wait_for_function(
         "document.getElementById('summary').textContent.includes('cancelled')", timeout=15000
     )
