@@ -19,10 +19,13 @@ one after another), `paper-cube` (the 28-spring cube, 30 x G, 1000 by default), 
 box, 4x4x4, seeds 1-6 as one sweep, G generations, 40 by default: runs whose robots can share
 kernel calls when several are driven at once). Every path warms
 its kernels first (a small untimed run), and the bound is measured after the path, in the same
-invocation. `--widths [PRESET[:SHAPE]]` prints only the kernel's per-robot cost against the
-number of robots in one call (1, 2, 3, 4, 5, 8) and against running them one by one.
-`--max-running N` sets the service's SOFTEVO_MAX_RUNNING (runs
-driven at once).
+invocation. For one run (not a sweep) it also prints the generation bound: the same robots
+cut per generation as the generation step cuts them, each batch timed alone, list-scheduled on
+the cores, generations one after another (`generation_bound`): bound / generation bound is the
+most any path that keeps the generational semantics can reach, generation bound / wall how much
+of that ceiling the path reaches. `--widths [PRESET[:SHAPE]]` prints only the kernel's
+per-robot cost against the number of robots in one call (1, 2, 3, 4, 5, 8) and against running
+them one by one. `--max-running N` sets the service's SOFTEVO_MAX_RUNNING (runs driven at once).
 """
 
 from __future__ import annotations
@@ -35,6 +38,7 @@ import os
 import platform
 import sqlite3
 import tempfile
+import threading
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -46,9 +50,10 @@ from service import Processes, start_redis, start_workers
 
 from softevo.core.config import RunConfig, resolve
 from softevo.core.evaluation import PoolEvaluator
-from softevo.core.evaluator import BatchResult, Evaluator
+from softevo.core.evaluator import BatchResult, Evaluator, split_evenly
 from softevo.core.evolution import Evolution
 from softevo.core.genome import Genome
+from softevo.core.limits import BATCH_SIZE
 from softevo.core.physics import simulate, simulate_batch
 from softevo.core.robot_file import parse_robot, robot_to_json
 from softevo.local_service import service_env, start_service
@@ -82,13 +87,18 @@ def workload(name: str, generations: int | None) -> list[dict[str, Any]]:
 
 
 class Recording(Evaluator):
-    """The local pool, keeping every robot file it was given."""
+    """The local pool, keeping every robot file it was given, by generation (a batch's key is
+    its generation's key, a dash and a digest)."""
 
     def __init__(self, inner: Evaluator) -> None:
         self.inner, self.files = inner, []
+        self.generations: dict[str, list[dict[str, Any]]] = {}
+        self._lock = threading.Lock()
 
     def evaluate_batch(self, robot_files: Any, key: str | None = None) -> BatchResult:
-        self.files.extend(robot_files)
+        with self._lock:
+            self.files.extend(robot_files)
+            self.generations.setdefault((key or "").rpartition("-")[0], []).extend(robot_files)
         return self.inner.evaluate_batch(robot_files, key)
 
     def capacity(self) -> int:
@@ -98,7 +108,10 @@ class Recording(Evaluator):
         self.inner.close()
 
 
-def through_run(requests: list[dict[str, Any]]) -> tuple[float, list[dict[str, Any]]]:
+Files = list[dict[str, Any]]
+
+
+def through_run(requests: list[dict[str, Any]]) -> tuple[float, Files, list[Files]]:
     """`softevo run`'s path: each run in this process, one after another, on the local pool."""
     with PoolEvaluator() as pool:
         Evolution.start(resolve({"preset": "quick", "generations": 2})).run(pool)  # warm
@@ -106,23 +119,26 @@ def through_run(requests: list[dict[str, Any]]) -> tuple[float, list[dict[str, A
         started = time.perf_counter()
         for request in requests:
             Evolution.start(resolve(request)).run(recording)
-        return time.perf_counter() - started, recording.files
+        return time.perf_counter() - started, recording.files, list(recording.generations.values())
 
 
-def simulated_files(database: Path) -> list[dict[str, Any]]:
-    """Every robot the service simulated (evaluated or failed, not cached), as robot files."""
+def simulated_files(database: Path) -> tuple[Files, list[Files]]:
+    """Every robot the service simulated (evaluated or failed, not cached), as robot files: all
+    of them, and by run and generation."""
     with contextlib.closing(sqlite3.connect(database)) as connection:
         rows = connection.execute(
-            "SELECT r.config, i.genome FROM individuals i JOIN runs r ON r.id = i.run_id "
-            "WHERE i.status IN ('evaluated', 'failed') AND r.id > 1"  # run 1: the warm-up
+            "SELECT r.config, i.genome, i.run_id, i.generation FROM individuals i "
+            "JOIN runs r ON r.id = i.run_id WHERE i.status IN ('evaluated', 'failed') "
+            "AND r.id > 1 ORDER BY i.run_id, i.generation, i.id"  # run 1: the warm-up
         ).fetchall()
-    files = []
+    files, generations = [], {}
     configs: dict[str, RunConfig] = {}
-    for config_json, genome_json in rows:
+    for config_json, genome_json, run_id, generation in rows:
         config = configs.setdefault(config_json, RunConfig.model_validate(json.loads(config_json)))
         genome = Genome.from_json(json.loads(genome_json))
         files.append(robot_to_json(config.make_encoding().to_robot(genome, config.sim)))
-    return files
+        generations.setdefault((run_id, generation), []).append(files[-1])
+    return files, list(generations.values())
 
 
 @contextlib.contextmanager
@@ -151,7 +167,7 @@ def wait_completed(client: httpx.Client, run_ids: list[int]) -> None:
 
 def through_service(
     requests: list[dict[str, Any]], sweep: bool, redis: bool, folder: Path, max_running: int | None
-) -> tuple[float, list[dict[str, Any]]]:
+) -> tuple[float, Files, list[Files]]:
     database = folder / "efficiency.db"
     with contextlib.ExitStack() as stack:
         settings = {"database_url": f"sqlite:///{database}"}
@@ -178,7 +194,7 @@ def through_service(
             run_ids = [client.post("/runs", json=request).json()["id"] for request in requests]
         wait_completed(client, run_ids)
         wall = time.perf_counter() - started
-    return wall, simulated_files(database)
+    return (wall, *simulated_files(database))
 
 
 def bound(files: list[dict[str, Any]]) -> float:
@@ -188,6 +204,30 @@ def bound(files: list[dict[str, Any]]) -> float:
     started = time.perf_counter()
     simulate_batch(robots, threads=os.cpu_count() or 1)
     return time.perf_counter() - started
+
+
+def generation_bound(generations: list[Files]) -> float:
+    """Seconds the generation step's batches would take if nothing but their physics cost
+    anything: each generation's new robots cut as the step cuts them (`split_evenly`: batches
+    of at most BATCH_SIZE, at least one per core), each batch timed alone on one thread as the
+    job function runs it (`small_alone`), the batches of a generation handed in order to the
+    first free core, one generation after another. That is the best any path can do that waits
+    for each generation's last robot before breeding the next (it leaves out parsing, the pool
+    and the coordinator, and two cores slowing each other): bound / this is the ceiling the
+    generation barrier leaves, and this / wall how much of that ceiling the path reaches."""
+    cores = os.cpu_count() or 1
+    robots = [[parse_robot(file) for file in files] for files in generations]
+    simulate_batch(robots[0][:1])
+    total = 0.0
+    for members in robots:
+        free = [0.0] * cores  # when each core is next free
+        for chunk in split_evenly(range(len(members)), BATCH_SIZE, cores):
+            started = time.perf_counter()
+            simulate_batch([members[i] for i in chunk], small_alone=True)
+            core = free.index(min(free))
+            free[core] += time.perf_counter() - started
+        total += max(free)
+    return total
 
 
 def widths(robot: str, repeats: int = 3) -> None:
@@ -240,21 +280,29 @@ def main() -> None:
         return
     print(f"# {cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
           f"SOFTEVO_MAX_RUNNING {args.max_running or 'default'}")  # fmt: skip
-    print("workload     path         simulations    wall (s)   bound (s)   bound/wall")
+    print(
+        "workload     path         simulations    wall (s)   bound (s)   bound/wall"
+        "   generation bound (s)   bound/generation bound   generation bound/wall"
+    )
     for name in args.workload.split(","):
         requests = workload(name, args.generations)
         for path in args.path.split(","):
             with tempfile.TemporaryDirectory() as folder:
                 if path == "run":
-                    wall, files = through_run(requests)
+                    wall, files, generations = through_run(requests)
                 else:
-                    wall, files = through_service(
+                    wall, files, generations = through_service(
                         requests, name in ("sweep", "seeds"), path == "service-rq", Path(folder),
                         args.max_running,
                     )  # fmt: skip
             physics = math.nan if args.no_bound else bound(files)
+            # one run at a time: several runs' generations overlap, so theirs add up to no bound
+            barrier = (
+                math.nan if args.no_bound or len(requests) > 1 else generation_bound(generations)
+            )
             print(f"{name:12} {path:12} {len(files):11d} {wall:11.1f} {physics:11.1f} "
-                  f"{physics / wall:12.2f}", flush=True)  # fmt: skip
+                  f"{physics / wall:12.2f} {barrier:22.1f} {physics / barrier:24.2f} "
+                  f"{barrier / wall:23.2f}", flush=True)  # fmt: skip
 
 
 if __name__ == "__main__":
