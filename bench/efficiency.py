@@ -25,7 +25,8 @@ the cores, generations one after another (`generation_bound`): bound / generatio
 most any path that keeps the generational semantics can reach, generation bound / wall how much
 of that ceiling the path reaches. `--widths [PRESET[:SHAPE]]` prints only the kernel's
 per-robot cost against the number of robots in one call (1, 2, 3, 4, 5, 8) and against running
-them one by one. `--max-running N` sets the service's SOFTEVO_MAX_RUNNING (runs driven at once).
+them one by one, and what two calls of two robots cost through the local pool, alone and at once.
+`--max-running N` sets the service's SOFTEVO_MAX_RUNNING (runs driven at once).
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ import tempfile
 import threading
 import time
 from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -49,7 +51,7 @@ from benchlib import cpu_model
 from service import Processes, start_redis, start_workers
 
 from softevo.core.config import RunConfig, resolve
-from softevo.core.evaluation import PoolEvaluator
+from softevo.core.evaluation import PoolEvaluator, evaluate_robot_files
 from softevo.core.evaluator import BatchResult, Evaluator, split_evenly
 from softevo.core.evolution import Evolution
 from softevo.core.genome import Genome
@@ -241,6 +243,8 @@ def widths(robot: str, repeats: int = 3) -> None:
         request["shape"] = [int(side) for side in shape.split("x")]
     evolution = Evolution.start(resolve(request))
     robots = [evolution.robot(item) for item in evolution.individuals()[:8]]
+    # first: this process's own kernel threads, once started, slow the pool's processes
+    pool_line = round_trip([robot_to_json(r) for r in robots[:4]], repeats * 20)
     simulate_batch(robots[:1])
     simulate(robots[0], energy=False)
 
@@ -259,6 +263,30 @@ def widths(robot: str, repeats: int = 3) -> None:
     for width in (1, 2, 3, 4, 5, 8):
         per = batched[width]
         print(f"{width:17d} {per * 1e3:14.2f} {per / batched[8]:19.2f} {per / alone:20.2f}")
+    print(pool_line)
+
+
+def round_trip(files: Files, count: int) -> str:
+    """What a generation of four new robots costs on the local pool, cut as the step cuts it
+    (two calls of two robots, one a process): one call in this process (`evaluate_robot_files`),
+    one through the pool alone (adds the round trip), both calls through the pool at once (adds
+    the two cores slowing each other: the physics floor of such a generation)."""
+    halves = [files[:2], files[2:4]]
+    with PoolEvaluator() as pool, ThreadPoolExecutor(2) as threads:
+        for half in halves * 2:
+            pool.evaluate_batch(half)  # every process warm
+
+        def timed(run: Callable[[], object]) -> float:
+            started = time.perf_counter()
+            for _ in range(count):
+                run()
+            return (time.perf_counter() - started) / count * 1e3
+
+        alone = timed(lambda: pool.evaluate_batch(halves[0]))
+        both = timed(lambda: list(threads.map(pool.evaluate_batch, halves)))
+    here = timed(lambda: evaluate_robot_files(halves[0]))
+    return (f"# two robots a call: {here:.2f} ms in this process, {alone:.2f} ms through the "
+            f"pool alone, {both:.2f} ms for two such calls through the pool at once")  # fmt: skip
 
 
 def main() -> None:
