@@ -243,7 +243,7 @@ def widths(robot: str, repeats: int = 3) -> None:
         request["shape"] = [int(side) for side in shape.split("x")]
     evolution = Evolution.start(resolve(request))
     robots = [evolution.robot(item) for item in evolution.individuals()[:8]]
-    # first: this process's own kernel threads, once started, slow the pool's processes
+    # before this process runs a kernel, so no thread of its own competes with the pool
     pool_line = round_trip([robot_to_json(r) for r in robots[:4]], repeats * 20)
     simulate_batch(robots[:1])
     simulate(robots[0], energy=False)
