@@ -93,13 +93,12 @@ class Recording(Evaluator):
     its generation's key, a dash and a digest)."""
 
     def __init__(self, inner: Evaluator) -> None:
-        self.inner, self.files = inner, []
+        self.inner = inner
         self.generations: dict[str, list[dict[str, Any]]] = {}
         self._lock = threading.Lock()
 
     def evaluate_batch(self, robot_files: Any, key: str | None = None) -> BatchResult:
         with self._lock:
-            self.files.extend(robot_files)
             self.generations.setdefault((key or "").rpartition("-")[0], []).extend(robot_files)
         return self.inner.evaluate_batch(robot_files, key)
 
@@ -113,7 +112,7 @@ class Recording(Evaluator):
 Files = list[dict[str, Any]]
 
 
-def through_run(requests: list[dict[str, Any]]) -> tuple[float, Files, list[Files]]:
+def through_run(requests: list[dict[str, Any]]) -> tuple[float, list[Files]]:
     """`softevo run`'s path: each run in this process, one after another, on the local pool."""
     with PoolEvaluator() as pool:
         Evolution.start(resolve({"preset": "quick", "generations": 2})).run(pool)  # warm
@@ -121,26 +120,26 @@ def through_run(requests: list[dict[str, Any]]) -> tuple[float, Files, list[File
         started = time.perf_counter()
         for request in requests:
             Evolution.start(resolve(request)).run(recording)
-        return time.perf_counter() - started, recording.files, list(recording.generations.values())
+        return time.perf_counter() - started, list(recording.generations.values())
 
 
-def simulated_files(database: Path) -> tuple[Files, list[Files]]:
-    """Every robot the service simulated (evaluated or failed, not cached), as robot files: all
-    of them, and by run and generation."""
+def simulated_files(database: Path) -> list[Files]:
+    """Every robot the service simulated (evaluated or failed, not cached), as robot files, by
+    run and generation."""
     with contextlib.closing(sqlite3.connect(database)) as connection:
         rows = connection.execute(
             "SELECT r.config, i.genome, i.run_id, i.generation FROM individuals i "
             "JOIN runs r ON r.id = i.run_id WHERE i.status IN ('evaluated', 'failed') "
             "AND r.id > 1 ORDER BY i.run_id, i.generation, i.id"  # run 1: the warm-up
         ).fetchall()
-    files, generations = [], {}
+    generations: dict[tuple[int, int], Files] = {}
     configs: dict[str, RunConfig] = {}
     for config_json, genome_json, run_id, generation in rows:
         config = configs.setdefault(config_json, RunConfig.model_validate(json.loads(config_json)))
         genome = Genome.from_json(json.loads(genome_json))
-        files.append(robot_to_json(config.make_encoding().to_robot(genome, config.sim)))
-        generations.setdefault((run_id, generation), []).append(files[-1])
-    return files, list(generations.values())
+        robot = config.make_encoding().to_robot(genome, config.sim)
+        generations.setdefault((run_id, generation), []).append(robot_to_json(robot))
+    return list(generations.values())
 
 
 @contextlib.contextmanager
@@ -169,7 +168,7 @@ def wait_completed(client: httpx.Client, run_ids: list[int]) -> None:
 
 def through_service(
     requests: list[dict[str, Any]], sweep: bool, redis: bool, folder: Path, max_running: int | None
-) -> tuple[float, Files, list[Files]]:
+) -> tuple[float, list[Files]]:
     database = folder / "efficiency.db"
     with contextlib.ExitStack() as stack:
         settings = {"database_url": f"sqlite:///{database}"}
@@ -196,7 +195,7 @@ def through_service(
             run_ids = [client.post("/runs", json=request).json()["id"] for request in requests]
         wait_completed(client, run_ids)
         wall = time.perf_counter() - started
-    return (wall, *simulated_files(database))
+    return wall, simulated_files(database)
 
 
 def bound(files: list[dict[str, Any]]) -> float:
@@ -272,16 +271,16 @@ def round_trip(files: Files, count: int) -> str:
     one through the pool alone (adds the round trip), both calls through the pool at once (adds
     the two cores slowing each other: the physics floor of such a generation)."""
     halves = [files[:2], files[2:4]]
+
+    def timed(run: Callable[[], object]) -> float:
+        started = time.perf_counter()
+        for _ in range(count):
+            run()
+        return (time.perf_counter() - started) / count * 1e3
+
     with PoolEvaluator() as pool, ThreadPoolExecutor(2) as threads:
         for half in halves * 2:
             pool.evaluate_batch(half)  # every process warm
-
-        def timed(run: Callable[[], object]) -> float:
-            started = time.perf_counter()
-            for _ in range(count):
-                run()
-            return (time.perf_counter() - started) / count * 1e3
-
         alone = timed(lambda: pool.evaluate_batch(halves[0]))
         both = timed(lambda: list(threads.map(pool.evaluate_batch, halves)))
     here = timed(lambda: evaluate_robot_files(halves[0]))
@@ -317,12 +316,13 @@ def main() -> None:
         for path in args.path.split(","):
             with tempfile.TemporaryDirectory() as folder:
                 if path == "run":
-                    wall, files, generations = through_run(requests)
+                    wall, generations = through_run(requests)
                 else:
-                    wall, files, generations = through_service(
+                    wall, generations = through_service(
                         requests, name in ("sweep", "seeds"), path == "service-rq", Path(folder),
                         args.max_running,
                     )  # fmt: skip
+            files = [file for members in generations for file in members]
             physics = math.nan if args.no_bound else bound(files)
             # one run at a time: several runs' generations overlap, so theirs add up to no bound
             barrier = (

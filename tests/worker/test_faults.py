@@ -258,8 +258,7 @@ def shortest_job(redis: Redis) -> float | None:
 
 def running_for(job: Job) -> float:
     assert job.started_at is not None
-    started = job.started_at if job.started_at.tzinfo else job.started_at.replace(tzinfo=UTC)
-    return (datetime.now(UTC) - started).total_seconds()
+    return (datetime.now(UTC) - utc(job.started_at)).total_seconds()
 
 
 def pause_mid_job(redis: Redis, workers: Workers, names: set[str], timeout: float = 30) -> InFlight:
@@ -318,10 +317,14 @@ def finished(redis: Redis, job_id: str) -> bool:
     return job is not None and job.get_status() == JobStatus.FINISHED
 
 
+def utc(moment: datetime) -> datetime:
+    """RQ's timestamps are UTC, naive or not."""
+    return moment if moment.tzinfo else moment.replace(tzinfo=UTC)
+
+
 def seconds_since(moment: datetime, job: Job) -> float:
     assert job.ended_at is not None
-    ended = job.ended_at if job.ended_at.tzinfo else job.ended_at.replace(tzinfo=UTC)
-    return (ended - moment).total_seconds()
+    return (utc(job.ended_at) - moment).total_seconds()
 
 
 #: the fault tests' own job functions, which a worker runs only when told to
