@@ -90,19 +90,36 @@ def test_bad_arguments_give_one_line_and_exit_2(tmp_path: Path) -> None:
         assert len(lines) == 1 and words in lines[0], done.stderr
 
 
+#: Starts the command in argv[1:] the way an interactive shell starts a foreground program:
+#: SIGINT at its default and not blocked (both are inherited across exec, and a Python started
+#: with SIGINT ignored never installs its KeyboardInterrupt handler).
+AS_A_SHELL_STARTS_IT = (
+    "import os, signal, sys; signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT}); "
+    "signal.signal(signal.SIGINT, signal.SIG_DFL); os.execv(sys.argv[1], sys.argv[1:])"
+)
+
+
+def _signals(pid: int) -> str:
+    """The process's blocked, ignored and caught signal masks, as /proc shows them."""
+    lines = Path(f"/proc/{pid}/status").read_text().splitlines()
+    return ", ".join(line for line in lines if line.startswith(("SigBlk", "SigIgn", "SigCgt")))
+
+
 def test_ctrl_c_stops_cleanly_and_keeps_partial_results(tmp_path: Path) -> None:
     out = tmp_path / "interrupted"
-    command = [sys.executable, "-P", "-m", "softevo.cli", "run", "--preset", "paper-voxel",
-               "--workers", "2", "--out", str(out)]  # fmt: skip
+    command = [sys.executable, "-c", AS_A_SHELL_STARTS_IT, sys.executable, "-P", "-m",
+               "softevo.cli", "run", "--preset", "paper-voxel", "--workers", "2", "--out",
+               str(out)]  # fmt: skip
     process = subprocess.Popen(
         command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True
     )
-    deadline = time.monotonic() + 120
-    while not (out / "curve.csv").exists() and time.monotonic() < deadline:
+    started = time.monotonic()
+    while not (out / "curve.csv").exists() and time.monotonic() < started + 120:
         time.sleep(0.1)
+    seen = f"curve.csv seen {time.monotonic() - started:.1f} s after the start; {_signals(process.pid)}"
     os.killpg(process.pid, signal.SIGINT)  # what Ctrl-C does: the whole process group
     _, stderr = process.communicate(timeout=120)
-    assert process.returncode == 130, stderr
+    assert process.returncode == 130, f"{seen}\n{stderr}"
     assert f"partial results and figures in {out}/" in stderr
     assert f"softevo run --resume {out}" in stderr
     rows = list(csv.DictReader((out / "curve.csv").open()))
