@@ -116,7 +116,7 @@ def test_ctrl_c_stops_cleanly_and_keeps_partial_results(tmp_path: Path) -> None:
     started = time.monotonic()
     while not (out / "curve.csv").exists() and time.monotonic() < started + 120:
         time.sleep(0.1)
-    seen = f"curve.csv seen {time.monotonic() - started:.1f} s after the start; {_signals(process.pid)}"
+    seen = f"curve.csv seen after {time.monotonic() - started:.1f} s; {_signals(process.pid)}"
     os.killpg(process.pid, signal.SIGINT)  # what Ctrl-C does: the whole process group
     _, stderr = process.communicate(timeout=120)
     assert process.returncode == 130, f"{seen}\n{stderr}"
