@@ -138,14 +138,18 @@ def current_revision(engine: Engine) -> str | None:
 
 
 @contextmanager
-def scratch_postgres(server_url: str, prefix: str = "softevo_scratch") -> Iterator[str]:
-    """A new, empty PostgreSQL database on the server of `server_url`, dropped (its connections
-    ended) on exit; yields its URL. For tests and benchmarks that must not share state."""
+def scratch_postgres(
+    server_url: str, prefix: str = "softevo_scratch", template: str | None = None
+) -> Iterator[str]:
+    """A new PostgreSQL database on the server of `server_url`, dropped (its connections ended)
+    on exit; yields its URL. Empty, or a copy of the database named `template` (which nothing
+    may be connected to). For tests and benchmarks that must not share state."""
     name = f"{prefix}_{uuid.uuid4().hex[:12]}"
     admin = create_engine(normalise_url(server_url), isolation_level="AUTOCOMMIT")
+    copy = "" if template is None else f' TEMPLATE "{template}"'
     try:
         with admin.connect() as connection:
-            connection.execute(text(f'CREATE DATABASE "{name}"'))
+            connection.execute(text(f'CREATE DATABASE "{name}"{copy}'))
     except Exception:
         admin.dispose()
         raise

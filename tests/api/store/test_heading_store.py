@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 
+import pytest
 from sqlalchemy import text
 
 from softevo.api import store
@@ -37,6 +38,7 @@ def test_a_heading_is_written_with_its_fitness_and_read_back_to_the_bit(db: Data
     assert math.isnan(heading["x1"])
 
 
+@pytest.mark.empty_database
 def test_individuals_stored_before_revision_0003_load_with_no_heading(database_url: str) -> None:
     """A database at 0002 with an evaluated generation, upgraded: its fitness is as it was, its
     headings are NaN (no cell for the `heading` descriptor), and the run's rows still load."""
