@@ -83,11 +83,14 @@ class SerialEvaluator(Evaluator):
         pass
 
 
-def warm_up() -> None:
-    """Load (or compile) the physics kernels, so no evaluation pays for it."""
+def warm_up(batched: bool = True, alone: bool = True) -> None:
+    """Load (or compile) the physics kernels, so no evaluation pays for it: the batched one and
+    the one for a robot alone (each compiles on its own, so two processes can share the work)."""
     robot = VoxelRobot((1, 1, 1), ("hard",), sim=sim_settings({"duration": 0.01, "settle_time": 0}))
-    simulate_batch([robot])
-    simulate(robot)
+    if batched:
+        simulate_batch([robot])
+    if alone:
+        simulate(robot)
 
 
 #: How much a pool process yields to the process that owns the pool (os.nice): simulations use
