@@ -107,7 +107,7 @@ def _signals(pid: int) -> str:
 
 def test_ctrl_c_stops_cleanly_and_keeps_partial_results(tmp_path: Path) -> None:
     out = tmp_path / "interrupted"
-    command = [sys.executable, "-c", AS_A_SHELL_STARTS_IT, sys.executable, "-P", "-m",
+    command = [sys.executable, "-P", "-c", AS_A_SHELL_STARTS_IT, sys.executable, "-P", "-m",
                "softevo.cli", "run", "--preset", "paper-voxel", "--workers", "2", "--out",
                str(out)]  # fmt: skip
     process = subprocess.Popen(
