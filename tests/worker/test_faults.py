@@ -42,7 +42,7 @@ from softevo.core.evaluation import SerialEvaluator
 from softevo.core.evolution import CURVE_COLUMNS, Evolution
 from softevo.core.limits import SAVE_SECONDS
 from softevo.core.robot_file import robot_to_json
-from softevo.worker.evaluator import RQEvaluator
+from softevo.worker.evaluator import RQEvaluator, work_units
 from softevo.worker.queue import QUEUE, SERIALIZER, result_key
 from tests.services import RedisServer, Workers
 
@@ -245,15 +245,23 @@ class InFlight:
         return self.job.id.rsplit("-a", 1)[0] + f"-a{n}"
 
 
-def shortest_job(redis: Redis) -> float | None:
-    """Seconds the quickest finished job of the queue ran, None before any finished."""
+def quickest_rate(redis: Redis) -> float | None:
+    """Seconds per work unit (`work_units`: steps x voxels, what the evaluator's own deadlines
+    are measured in) of the quickest finished job of the queue; None before any finished. A
+    job's length in seconds alone says little: a batch holds one robot or several."""
     registry = FinishedJobRegistry(QUEUE, connection=redis, serializer=SERIALIZER)
-    seconds = []
+    rates = []
     for job_id in registry.get_job_ids(cleanup=False):
         job = fetch(redis, job_id)
         if job is not None and job.started_at is not None and job.ended_at is not None:
-            seconds.append((job.ended_at - job.started_at).total_seconds())
-    return min(seconds, default=None)
+            seconds = (job.ended_at - job.started_at).total_seconds()
+            rates.append(seconds / sum(map(work_units, job.args[1])))
+    return min(rates, default=None)
+
+
+def half(job: Job, rate: float) -> float:
+    """Half of what `job` would take at `rate` seconds per work unit."""
+    return rate * sum(map(work_units, job.args[1])) / 2
 
 
 def running_for(job: Job) -> float:
@@ -262,12 +270,12 @@ def running_for(job: Job) -> float:
 
 
 def pause_mid_job(redis: Redis, workers: Workers, names: set[str], timeout: float = 30) -> InFlight:
-    """SIGSTOP a worker (and its work horse) of `names` in the middle of a job: in its first
-    half, when jobs have finished before (a job pushes its result at its very end, and the
-    coordinator takes it off the list at once, so an empty result list alone does not prove
-    the result was never delivered)."""
+    """SIGSTOP a worker (and its work horse) of `names` in the middle of a job: in the first
+    half of what it would take at the quickest rate seen, when jobs have finished before (a
+    job pushes its result at its very end, and the coordinator takes it off the list at once,
+    so an empty result list alone does not prove the result was never delivered)."""
     registry = StartedJobRegistry(QUEUE, connection=redis, serializer=SERIALIZER)
-    shortest = shortest_job(redis)
+    rate = quickest_rate(redis)
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         for job_id in registry.get_job_ids(cleanup=False):  # observe only, never clean up
@@ -289,7 +297,7 @@ def pause_mid_job(redis: Redis, workers: Workers, names: set[str], timeout: floa
                 job.get_status(refresh=True) == JobStatus.STARTED
                 and redis.llen(result_key(batch_key)) == 0
                 and children(main) == horses
-                and (shortest is None or (job.started_at and running_for(job) < shortest / 2))
+                and (rate is None or (job.started_at and running_for(job) < half(job, rate)))
             ):
                 return caught
             caught.signal(signal.SIGCONT)  # it had just finished: try again
