@@ -157,12 +157,18 @@ def scratch_postgres(
         yield make_url(normalise_url(server_url)).set(database=name).render_as_string(False)
     finally:
         with admin.connect() as connection:
-            connection.execute(
-                text(
-                    "SELECT pg_terminate_backend(pid) FROM pg_stat_activity "
-                    "WHERE datname = :name AND pid <> pg_backend_pid()"
-                ),
-                {"name": name},
-            )
+            end_sessions(connection, name)
             connection.execute(text(f'DROP DATABASE IF EXISTS "{name}"'))
         admin.dispose()
+
+
+def end_sessions(connection: Connection, database: str) -> None:
+    """End every session on the PostgreSQL database `database` but `connection`'s own (a
+    database cannot be dropped, or handed to the next test, while a session holds it)."""
+    connection.execute(
+        text(
+            "SELECT pg_terminate_backend(pid) FROM pg_stat_activity "
+            "WHERE datname = :name AND pid <> pg_backend_pid()"
+        ),
+        {"name": database},
+    )

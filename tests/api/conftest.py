@@ -15,11 +15,11 @@ from pathlib import Path
 
 import pytest
 from fastapi.testclient import TestClient
-from sqlalchemy import create_engine, text
+from sqlalchemy import create_engine, inspect, text
 from sqlalchemy.engine import make_url
 
 from softevo.api.app import create_app
-from softevo.api.db import Database, normalise_url, scratch_postgres
+from softevo.api.db import Database, end_sessions, normalise_url, scratch_postgres
 from softevo.api.settings import Settings
 from softevo.core.evaluation import SerialEvaluator
 
@@ -59,6 +59,7 @@ class PostgresDatabases:
     def __init__(self, stack: ExitStack) -> None:
         self.stack = stack
         self.template: str | None = None  # migrated once, then copied
+        self.tables = ""  # the template's tables but alembic_version, for TRUNCATE
         self.free: list[str] = []
 
     def take(self) -> str:
@@ -68,25 +69,22 @@ class PostgresDatabases:
             url = self.stack.enter_context(_fresh_postgres())
             database = Database(url)
             database.upgrade()
+            self.tables = ", ".join(
+                f'"{table}"'
+                for table in inspect(database.engine).get_table_names()
+                if table != "alembic_version"
+            )
             database.dispose()  # a template has no connections
             self.template = make_url(url).database
         return self.stack.enter_context(_fresh_postgres(self.template))
 
     def give_back(self, url: str) -> None:
-        """Ends the test's connections and empties the database as a new copy would be."""
+        """Ends the test's sessions and empties the database as a new copy would be."""
         engine = create_engine(normalise_url(url), isolation_level="AUTOCOMMIT")
         try:
             with engine.connect() as connection:
-                connection.execute(text(
-                    "SELECT pg_terminate_backend(pid) FROM pg_stat_activity "
-                    "WHERE datname = current_database() AND pid <> pg_backend_pid()"
-                ))  # fmt: skip
-                tables = connection.execute(text(
-                    "SELECT tablename FROM pg_tables WHERE schemaname = 'public' "
-                    "AND tablename <> 'alembic_version'"
-                )).scalars()  # fmt: skip
-                names = ", ".join(f'"{table}"' for table in tables)
-                connection.execute(text(f"TRUNCATE {names} RESTART IDENTITY CASCADE"))
+                end_sessions(connection, make_url(url).database or "")
+                connection.execute(text(f"TRUNCATE {self.tables} RESTART IDENTITY CASCADE"))
         finally:
             engine.dispose()
         self.free.append(url)

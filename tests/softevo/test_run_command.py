@@ -100,8 +100,11 @@ AS_A_SHELL_STARTS_IT = (
 
 
 def _signals(pid: int) -> str:
-    """The process's blocked, ignored and caught signal masks, as /proc shows them."""
-    lines = Path(f"/proc/{pid}/status").read_text().splitlines()
+    """The process's blocked, ignored and caught signal masks, as Linux's /proc shows them."""
+    try:
+        lines = Path(f"/proc/{pid}/status").read_text().splitlines()
+    except OSError as error:  # no /proc here, or the process already gone
+        return f"no signal masks ({type(error).__name__})"
     return ", ".join(line for line in lines if line.startswith(("SigBlk", "SigIgn", "SigCgt")))
 
 

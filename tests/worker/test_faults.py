@@ -254,14 +254,13 @@ def quickest_rate(redis: Redis) -> float | None:
     for job_id in registry.get_job_ids(cleanup=False):
         job = fetch(redis, job_id)
         if job is not None and job.started_at is not None and job.ended_at is not None:
-            seconds = (job.ended_at - job.started_at).total_seconds()
-            rates.append(seconds / sum(map(work_units, job.args[1])))
+            rates.append((job.ended_at - job.started_at).total_seconds() / units(job))
     return min(rates, default=None)
 
 
-def half(job: Job, rate: float) -> float:
-    """Half of what `job` would take at `rate` seconds per work unit."""
-    return rate * sum(map(work_units, job.args[1])) / 2
+def units(job: Job) -> float:
+    """The job's robots' work units (its arguments are the batch key, then the robot files)."""
+    return sum(map(work_units, job.args[1]))
 
 
 def running_for(job: Job) -> float:
@@ -297,7 +296,7 @@ def pause_mid_job(redis: Redis, workers: Workers, names: set[str], timeout: floa
                 job.get_status(refresh=True) == JobStatus.STARTED
                 and redis.llen(result_key(batch_key)) == 0
                 and children(main) == horses
-                and (rate is None or (job.started_at and running_for(job) < half(job, rate)))
+                and (rate is None or (job.started_at and running_for(job) < rate * units(job) / 2))
             ):
                 return caught
             caught.signal(signal.SIGCONT)  # it had just finished: try again
