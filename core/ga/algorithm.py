@@ -29,6 +29,7 @@ with descriptors, any other algorithm keeps the same archive beside it, for comp
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from typing import Any, Literal
 
@@ -151,13 +152,14 @@ class GeneticAlgorithm:
         individuals: list[Individual],
         fitness: np.ndarray | list[float],
         *,
+        measures: Sequence[Mapping[str, float]] | None = None,
         heading: np.ndarray | list[float] | None = None,
         **counts: int,
     ) -> tuple[GAState, GenerationStats]:
         """The state after `individuals` (what `ask(state)` gave) scored `fitness` (NaN =
-        failed), and the generation's statistics; `heading` (degrees, NaN = unknown) is each
-        one's measured heading, which the `heading` descriptor needs; `counts` (evaluations,
-        saved, failed, ...) are stored with the statistics."""
+        failed), and the generation's statistics; `measures` is each one's record of measures
+        (name -> value, NaN or missing = unknown), which behavioural descriptors read;
+        `counts` (evaluations, saved, failed, ...) are stored with the statistics."""
         values = np.asarray(fitness, dtype=np.float64)
         if values.shape != (len(individuals),):
             raise ValueError(
@@ -170,8 +172,10 @@ class GeneticAlgorithm:
             if best is None or values[index] > best[1]:
                 best = (individuals[index].genome, float(values[index]), state.generation)
         best_so_far = best[1] if best is not None else math.nan
-        headings = np.full(len(individuals), np.nan) if heading is None else np.asarray(heading)
-        archive = self._archive(state, individuals, values, headings)
+        if measures is None:
+            directions = [math.nan] * len(individuals) if heading is None else list(heading)
+            measures = [{"heading": float(direction)} for direction in directions]
+        archive = self._archive(state, individuals, values, measures)
         stats = generation_stats(
             state.generation,
             values,
@@ -198,23 +202,21 @@ class GeneticAlgorithm:
         state: GAState,
         individuals: list[Individual],
         fitness: np.ndarray,
-        heading: np.ndarray,
+        measures: Sequence[Mapping[str, float]],
     ) -> Archive | None:
         """The archive after this generation (None for a run without descriptors): each robot
-        that did not fail is offered to the cell its descriptors (of its body, and its measured
-        `heading`) fall in."""
+        that did not fail is offered to the cell its descriptors (of its body, and its
+        measures) fall in."""
         config = self.config
         if not config.descriptors:
             return None
         archive = state.archive or Archive(config.descriptors, config.bins)
         archive = archive.copy()
         box = self.encoding.shape
-        measured = zip(individuals, fitness, heading.tolist(), strict=True)
-        for index, (individual, value, direction) in enumerate(measured):
+        measured = zip(individuals, fitness, measures, strict=True)
+        for index, (individual, value, record) in enumerate(measured):
             if math.isfinite(value):
-                values = describe(
-                    config.descriptors, individual.genome.discrete, box, {"heading": direction}
-                )
+                values = describe(config.descriptors, individual.genome.discrete, box, record)
                 archive.add(values, float(value), state.generation, index, individual.genome)
         return archive
 

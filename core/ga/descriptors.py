@@ -21,7 +21,7 @@ One is behavioural, measured by the simulation rather than read from the body:
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from itertools import compress
@@ -138,7 +138,7 @@ def describe(
     names: Sequence[str],
     labels: Sequence[int],
     box: tuple[int, int, int],
-    measured: dict[str, float] | None = None,
+    measured: Mapping[str, float] | None = None,
 ) -> tuple:
     """The descriptor values (in `names`' order) of a voxel genome, the behavioural ones taken
     from `measured` (name -> value); () if it builds nothing or a measured value is missing or
