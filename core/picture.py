@@ -36,6 +36,8 @@ _DPI = 80
 #: Camera: looking from azimuth / elevation (degrees); light: a fixed direction (world frame).
 _AZIMUTH, _ELEVATION = -60.0, 25.0
 _LIGHT = np.array([-0.4, -0.6, 0.9]) / np.linalg.norm([-0.4, -0.6, 0.9])
+#: A position farther than this from the origin (m) is drawn as a simulation that blew up.
+_FARTHEST = 1e5
 _GROUND = ((0.93, 0.93, 0.90), (0.82, 0.83, 0.80))
 FFMPEG_MISSING = (
     "MP4 needs the ffmpeg program, which is not on PATH: install it (apt-get install ffmpeg, "
@@ -97,7 +99,7 @@ class _Scene:
         self.half = 1.1 * span + robot.sim.edge_length  # half the view's width (m): room to move
 
 
-def _draw(scene: _Scene, ax: Any, positions: np.ndarray, time: float | None) -> None:
+def _draw(scene: _Scene, ax: Any, positions: np.ndarray, clock: str | None) -> None:
     """One frame on `ax` (cleared): ground, the robot's shaded outer faces, the clock."""
     from matplotlib.collections import PolyCollection
 
@@ -125,8 +127,8 @@ def _draw(scene: _Scene, ax: Any, positions: np.ndarray, time: float | None) -> 
             screen, facecolors=colours[order], edgecolors=(0, 0, 0, 0.35), linewidths=0.4
         )
     )
-    if time is not None:
-        ax.text(0.03, 0.95, f"t = {time:.2f} s", transform=ax.transAxes, va="top", fontsize=8)
+    if clock is not None:
+        ax.text(0.03, 0.95, clock, transform=ax.transAxes, va="top", fontsize=8)
 
 
 def _ground(scene: _Scene, centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -183,6 +185,7 @@ def movie(robot: Robot, format: str, fps: float = FPS, seconds: float = SECONDS)
     if format == "mp4" and not ffmpeg_available():
         raise PictureError(FFMPEG_MISSING)
     times, frames = _frames(robot, fps, seconds)
+    frames, blew_up_at = hold_last_finite(times, frames)
     scene = _Scene(robot)
     figure, ax = _figure(SIZE)
     writer = PillowWriter(fps=fps) if format == "gif" else FFMpegWriter(fps=fps, codec="h264")
@@ -190,7 +193,10 @@ def movie(robot: Robot, format: str, fps: float = FPS, seconds: float = SECONDS)
         path = Path(folder) / f"picture.{format}"
         with writer.saving(figure, str(path), dpi=_DPI):
             for time, positions in zip(times, frames, strict=True):
-                _draw(scene, ax, positions, float(time))
+                clock = f"t = {time:.2f} s"
+                if blew_up_at is not None and time >= blew_up_at:
+                    clock += f": the simulation blew up at {blew_up_at:.2f} s (sim.dt too large?)"
+                _draw(scene, ax, positions, clock)
                 writer.grab_frame()
         return path.read_bytes()
 
@@ -200,6 +206,22 @@ def movie_from_file(robot_file: dict[str, Any], format: str, fps: float, seconds
     from softevo.core.robot_file import parse_robot
 
     return movie(parse_robot(robot_file), format, fps, seconds)
+
+
+def hold_last_finite(times: np.ndarray, frames: np.ndarray) -> tuple[np.ndarray, float | None]:
+    """Frames [N, M, 3] with every frame from the first non-finite one (or one flung past
+    _FARTHEST metres) on replaced by the last
+    finite frame, and that first frame's time (s): a robot whose simulation blew up (too large
+    a `sim.dt`) is drawn until it did and then held, never NaN handed to the drawing. (None:
+    it never blew up.) The first frame is the robot at rest, always finite."""
+    with np.errstate(invalid="ignore"):  # NaN compares False: not finite
+        finite = (np.abs(frames) < _FARTHEST).all(axis=(1, 2))
+    if finite.all():
+        return frames, None
+    first = max(1, int(np.argmin(finite)))
+    held = frames.copy()
+    held[first:] = frames[first - 1]
+    return held, float(times[first])
 
 
 def _frames(robot: Robot, fps: float, seconds: float) -> tuple[np.ndarray, np.ndarray]:

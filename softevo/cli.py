@@ -59,8 +59,13 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             Path(args.trajectory).write_text(json.dumps(trajectory) + "\n")
         except OSError as error:
             raise CommandError(f"{args.trajectory}: cannot write ({error.strerror})") from None
-    print(json.dumps(measures, indent=2))
-    return 0 if measures["stable"] else 1
+    print(json.dumps(measures, indent=2, allow_nan=False))
+    if not measures["stable"]:  # the measures are null: say why, in one line
+        raise CommandError(
+            f"{args.robot}: the simulation blew up (positions not finite, or a spring stretched "
+            "past its limit), so every measure is null; try a smaller sim.dt"
+        )
+    return 0
 
 
 def _write_file(path: str, data: bytes, format: str) -> int:

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from softevo.core.nulls import to_null
+from softevo.core.nulls import to_null, to_nulls
 from softevo.core.objectives import OBJECTIVE_MEASURES, STANDARD_GRAVITY
 from softevo.core.physics import kernels
 from softevo.core.robot import Mechanics, Robot, build_mechanics
@@ -107,8 +107,8 @@ class SimResult:
             "masses": self.masses,
             "springs": self.springs,
             "steps": self.steps,
-            "com_start": list(self.com_start),
-            "com_end": list(self.com_end),
+            "com_start": to_nulls(self.com_start),  # null where the simulation blew up
+            "com_end": to_nulls(self.com_end),
             "distance": _json_float(self.distance),
             "speed": _json_float(self.speed),
             "forward_speed": _json_float(self.forward_speed),
