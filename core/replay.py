@@ -7,7 +7,10 @@ The frame rate is lowered until the frames hold at most `max_positions` mass pos
 from __future__ import annotations
 
 import math
-from typing import Any
+from dataclasses import replace
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
 
 from softevo.core.export import mass_faces
 from softevo.core.lattice import Lattice
@@ -16,6 +19,9 @@ from softevo.core.nulls import to_null
 from softevo.core.robot import Robot, build_mechanics
 from softevo.core.robot_file import robot_to_json
 from softevo.core.terrain import mesh
+
+if TYPE_CHECKING:  # the physics loads only when a replay is asked
+    from softevo.core.physics.simulate import Trajectory
 
 
 def record_every(robot: Robot, masses: int, fps: float, max_positions: int) -> int:
@@ -50,16 +56,29 @@ def replay_frames(
     result, trajectory = simulate(mechanics, record_every=every)
     assert trajectory is not None
     measures = result.to_json()
-    frames = trajectory.frames
+    trajectory, blew_up_at = finite_part(trajectory)
     return {
         "speed": to_null(result.speed),
         "measures": {key: measures[key] for key in MEASURES},
         "fps": 1.0 / (every * robot.sim.dt),
+        "blew_up_at": blew_up_at,
         "robot": robot_to_json(robot),
-        "terrain": terrain_view(robot.sim.terrain, frames),
+        "terrain": terrain_view(robot.sim.terrain, trajectory.frames),
         **voxel_faces(robot, mechanics.lattice),
         **trajectory.to_json(),
     }
+
+
+def finite_part(trajectory: Trajectory) -> tuple[Trajectory, float | None]:
+    """The frames up to the first with a position that is not finite, and that frame's time
+    (s): a robot whose simulation blew up (too large a `sim.dt`) is replayed until it does,
+    and says when, instead of failing on NaN. (None, with every frame: it never blew up.)"""
+    finite = np.isfinite(trajectory.frames).all(axis=(1, 2))
+    if finite.all():
+        return trajectory, None
+    first = max(1, int(np.argmin(finite)))  # the first frame is the robot at rest, never NaN
+    kept = replace(trajectory, times=trajectory.times[:first], frames=trajectory.frames[:first])
+    return kept, float(trajectory.times[first])
 
 
 def voxel_faces(robot: Robot, lattice: Lattice) -> dict[str, Any]:
@@ -77,7 +96,8 @@ MEASURES = ("forward_speed", "climb_rate", "energy", "cost_of_transport")
 
 def terrain_view(terrain: Any, frames: Any) -> dict[str, Any]:
     """The terrain under the robot's path, MARGIN metres around it, for the viewer to draw."""
-    low, high = frames.min(axis=(0, 1)), frames.max(axis=(0, 1))
+    low = np.maximum(frames.min(axis=(0, 1)), -FARTHEST)  # a robot flung away is not followed
+    high = np.minimum(frames.max(axis=(0, 1)), FARTHEST)
     x_range = (math.floor(low[0]) - MARGIN, math.ceil(high[0]) + MARGIN)
     y_range = (math.floor(low[1]) - MARGIN, math.ceil(high[1]) + MARGIN)
     view: dict[str, Any] = terrain.model_dump()
@@ -86,5 +106,6 @@ def terrain_view(terrain: Any, frames: Any) -> dict[str, Any]:
     return view
 
 
-#: Metres of terrain drawn around the robot's path, and the grid's spacing (m).
-MARGIN, MESH_STEP = 4, 0.1
+#: Metres of terrain drawn around the robot's path, the grid's spacing (m) where the mesh's cap
+#: (`softevo.core.terrain.MAX_MESH_POINTS`) allows it, and the farthest from the origin drawn (m).
+MARGIN, MESH_STEP, FARTHEST = 4, 0.1, 1e5

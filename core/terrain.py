@@ -30,6 +30,8 @@ from pydantic import BaseModel, ConfigDict, Field
 FLAT, SLOPE, STEPS, ROUGH, HURDLES = 0, 1, 2, 3, 4
 #: Cosines summed by a rough terrain.
 ROUGH_WAVES = 8
+#: Most heights one drawn mesh of a terrain holds (`mesh`): about 1 MB of JSON.
+MAX_MESH_POINTS = 100_000
 
 # Cody-Waite pi / 2 in two parts (the first with 33 significant bits, so q x it is exact) and the
 # minimax coefficients of sin and cos on [-pi / 4, pi / 4] (fdlibm's k_sin.c and k_cos.c).
@@ -203,6 +205,18 @@ def kernel_params(terrain: AnyTerrain) -> tuple[int, np.ndarray]:
     return terrain.code, np.array(terrain.params(), dtype=np.float64)
 
 
+def edge_count(terrain: AnyTerrain, low: float, high: float) -> int:
+    """How many x `edges` would return between `low` and `high`, counted without listing them
+    (a tread of 1e-9 m puts billions of risers under a robot's path)."""
+    if isinstance(terrain, Steps):
+        first = max(1, math.ceil(low / terrain.depth))
+        return max(0, math.floor(high / terrain.depth) - first + 1)
+    if isinstance(terrain, Hurdles):
+        first = max(1, math.floor(low / terrain.spacing))
+        return 2 * max(0, math.floor(high / terrain.spacing) - first + 1)
+    return 0
+
+
 def edges(terrain: AnyTerrain, low: float, high: float) -> list[float]:
     """x of the vertical faces (risers, bar faces) between `low` and `high`."""
     if isinstance(terrain, Steps):
@@ -216,16 +230,36 @@ def edges(terrain: AnyTerrain, low: float, high: float) -> list[float]:
 
 
 def mesh(
-    terrain: AnyTerrain, x_range: tuple[float, float], y_range: tuple[float, float], step: float
+    terrain: AnyTerrain,
+    x_range: tuple[float, float],
+    y_range: tuple[float, float],
+    step: float,
+    most: int = MAX_MESH_POINTS,
 ) -> dict[str, list]:
     """The surface over a rectangle as a height grid for a viewer: x (m) every `step` and on
     both sides of every vertical face (so risers and bars are drawn upright), y every `step`
-    (two rows for the kinds that do not vary along y), z [len(y)][len(x)] (m, 3 decimals)."""
+    (two rows for the kinds that do not vary along y), z [len(y)][len(x)] (m, 3 decimals).
+
+    At most `most` heights whatever the terrain and the rectangle (as a replay's positions are
+    capped): the grid coarsens until it fits, and faces too many to draw upright within it
+    are left to the grid."""
     (x0, x1), (y0, y1) = x_range, y_range
+    rough = isinstance(terrain, Rough)
+
+    def rows(step: float) -> int:  # len(y), or a bound of it
+        return math.ceil((y1 - y0) / step) + 2 if rough else 2
+
+    def columns(step: float) -> int:  # a bound of len(x) on the grid alone
+        return math.ceil((x1 - x0) / step) + 2
+
+    while columns(step) * rows(step) > most:
+        step *= 1.25
     xs = set(np.arange(x0, x1 + step, step).round(6).tolist())
-    for x in edges(terrain, x0, x1):  # just before a face, and on it: the face is upright
-        xs.update((round(x - 1e-6, 7), x))
+    faces = edge_count(terrain, x0, x1)  # each drawn with two columns
+    if (columns(step) + 2 * faces) * rows(step) <= most:
+        for face in edges(terrain, x0, x1):  # just before a face, and on it: it is upright
+            xs.update((round(face - 1e-6, 7), face))
     x = np.array(sorted(xs))
-    y = np.arange(y0, y1 + step, step) if isinstance(terrain, Rough) else np.array([y0, y1])
+    y = np.arange(y0, y1 + step, step) if rough else np.array([y0, y1])
     z = terrain.surface(x[None, :], y[:, None])
     return {"x": x.round(6).tolist(), "y": y.round(6).tolist(), "z": z.round(3).tolist()}

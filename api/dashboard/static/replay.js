@@ -63,7 +63,8 @@ export class Replay {
   build(label) {
     const data = this.data;
     this.dispose();
-    const title = h("h3", {}, "Replay: ", label, data.speed !== null ? ` · ${fmt(data.speed)} m/s` : " · unstable");
+    const title = h("h3", {}, "Replay: ", label, data.speed !== null ? ` · ${fmt(data.speed)} m/s` : " · unstable",
+      data.blew_up_at !== null && data.blew_up_at !== undefined ? ` (blew up at ${fmt(data.blew_up_at, 3)} s: its sim.dt is too large)` : "");
     const measures = data.measures || {};
     const terrain = terrainText({ sim: { terrain: data.terrain } });
     const facts = h("p", { class: "muted", id: "replay-measures" }, `terrain: ${terrain} · forward ${fmt(measures.forward_speed)} m/s · climb ${fmt(measures.climb_rate)} m/s`
