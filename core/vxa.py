@@ -13,11 +13,14 @@ docs/export.md says where it is exact and where it is not:
   docs/export.md, checked against the lattice in tests/core/test_export.py). A lone Voxelyze bond
   E L matched to one spring would give E = k / L, 7.6 times softer than softevo's solid.
 * Density = the robot's mass (softevo's point masses) over its voxels' volume: total mass kept.
-* actuation: softevo's rest length L(1 + A sin(w t + c)) with A = amplitude_scale * b (negated
-  for neg_sine) becomes Voxelyze's thermal expansion 1 + CTE * TempAmp * sin(2 pi (t /
-  TempPeriod + MaterialTempPhase)) with TempAmp = 1, TempBase = 0, CTE = A,
-  TempPeriod = 2 pi / w and MaterialTempPhase = c / (2 pi) (in periods). Exact in kind; gene a
-  (a constant rest-length offset) has no Voxelyze equivalent and is left out.
+* actuation: softevo's voxel size 1 + offset + A sin(w t + phi), per voxel, becomes the size
+  that evosoro's Voxelyze gives it from its CTE, TempPeriod = 2 pi / w and the per-voxel layers
+  PhaseOffset, TempAmpDamp, FinalTempAmpDamp, GrowthTime and Final/InitialVoxelSize
+  (softevo.core.vxa_layers), ramped in over softevo's settle time; GrowthAmplitude lets a voxel
+  grow as well as shrink.
+* the run: a GA section (the fitness file, with the centre of mass traced), a stop at softevo's
+  duration, the drop height as empty layers under the robot, softevo's velocity damping as
+  SlowDampingZ.
 """
 
 from __future__ import annotations
@@ -30,9 +33,23 @@ import numpy as np
 from softevo.core.export import COLOURS, ExportError
 from softevo.core.robot import ACTUATED_LABELS, Robot, VoxelRobot
 from softevo.core.settings import SimSettings
+from softevo.core.vxa_layers import (
+    VoxelActuation,
+    drop_layers,
+    slow_damping,
+    structure_layers,
+    voxel_actuation,
+)
 
 #: Palette order: the material index of each label in the Structure's Data (0 = empty).
 MATERIAL_IDS = {"soft": 1, "hard": 2, "sine": 3, "neg_sine": 4}
+#: The fitness file's name in the GA section: Voxelyze writes it in its working folder.
+FITNESS_FILE = "softevo_fitness.xml"
+#: CM trace points in the fitness file per actuation period (or per duration without actuation).
+TRACES_PER_PERIOD = 50
+#: Voxelyze's bond damping ratio (1 = critical): the published examples' value; softevo has no
+#: damping of its own inside the body, but the engine needs this to stay stable (docs/export.md).
+BOND_DAMPING_Z = 1.0
 #: Names given to the materials, in the style of the published examples.
 MATERIAL_NAMES = {
     "soft": "Passive_Soft",
@@ -88,12 +105,14 @@ def elastic_modulus(stiffness: float, edge_length: float) -> float:
     return YOUNGS_PER_SPRING * stiffness / edge_length
 
 
-def material_table(robot: VoxelRobot, n_masses: int, n_voxels: int) -> dict[str, dict[str, float]]:
+def material_table(
+    robot: VoxelRobot, actuation: VoxelActuation, n_masses: int, n_voxels: int
+) -> dict[str, dict[str, float]]:
     """Per label: Elastic_Mod, Density, CTE and MaterialTempPhase of its Voxelyze material."""
     sim = robot.sim
     density = n_masses * sim.mass / (n_voxels * sim.edge_length**3)
-    amplitude = sim.amplitude_scale * robot.actuation.b if sim.omega > 0 else 0.0
-    phase = (robot.actuation.c / (2 * math.pi)) % 1.0
+    amplitude = actuation.cte if sim.omega > 0 else 0.0
+    phase = robot.actuation.c % (2 * math.pi)  # radians, as Voxelyze's UpdateCurTemp adds it
     stiffness = {
         "soft": sim.soft_stiffness,
         "hard": sim.hard_stiffness,
@@ -112,26 +131,30 @@ def material_table(robot: VoxelRobot, n_masses: int, n_voxels: int) -> dict[str,
     }
 
 
-def _simulator(xml: _Xml, sim: SimSettings) -> None:
+def _simulator(xml: _Xml, sim: SimSettings, slow_damping_z: float) -> None:
     xml.open("Simulator")
     xml.comment(
-        "Voxelyze picks its own stable time step (DtFrac); softevo's dt = "
-        f"{_number(sim.dt)} s and its velocity damping factor {_number(sim.damping)} per step "
-        "have no Voxelyze equivalent, the damping below is the published examples' default"
+        f"Voxelyze picks its own stable time step (DtFrac); softevo's dt = {_number(sim.dt)} s. "
+        f"SlowDampingZ matches softevo's velocity factor {_number(sim.damping)} per step"
     )
     xml.open("Integration")
     xml.leaf("Integrator", 0)
     xml.leaf("DtFrac", 0.95)
     xml.close("Integration")
     xml.open("Damping")
-    xml.leaf("BondDampingZ", 1.0)
+    xml.leaf("BondDampingZ", BOND_DAMPING_Z)
     xml.leaf("ColDampingZ", 0.8)
-    xml.leaf("SlowDampingZ", 0.01)
+    xml.leaf("SlowDampingZ", slow_damping_z)
     xml.close("Damping")
     xml.open("StopCondition")
-    xml.leaf("StopConditionType", 2)  # Voxelyze 1 / VoxCAD: stop after a simulated time
+    xml.leaf("StopConditionType", 2)  # SC_MAX_SIM_TIME: stop after a simulated time
     xml.leaf("StopConditionValue", sim.duration)
-    xml.leaf("InitCmTime", sim.settle_time)  # the fitness clock starts after settling
+    xml.comment(
+        "evosoro's Voxelyze starts actuation and its fitness clock at InitCmTime: 0 here, so "
+        "the voxels swing in phase with softevo's clock; softevo's fitness clock starts at "
+        f"{_number(sim.settle_time)} s (settle_time): take it from the fitness file's CMTrace"
+    )
+    xml.leaf("InitCmTime", 0.0)
     xml.open("StopConditionFormula")  # voxcraft-sim: stop when t - duration > 0
     xml.open("mtSUB")
     xml.leaf("mtVAR", "t")
@@ -139,10 +162,14 @@ def _simulator(xml: _Xml, sim: SimSettings) -> None:
     xml.close("mtSUB")
     xml.close("StopConditionFormula")
     xml.close("StopCondition")
+    xml.open("GA")  # evosoro's Voxelyze writes its fitness file only with a name
+    xml.leaf("WriteFitnessFile", 1)
+    xml.leaf("FitnessFileName", FITNESS_FILE)
+    xml.close("GA")
     xml.close("Simulator")
 
 
-def _environment(xml: _Xml, sim: SimSettings) -> None:
+def _environment(xml: _Xml, sim: SimSettings, growth_amplitude: float) -> None:
     actuated = sim.omega > 0
     xml.open("Environment")
     xml.open("Fixed_Regions")
@@ -166,6 +193,11 @@ def _environment(xml: _Xml, sim: SimSettings) -> None:
     xml.leaf("VaryTempEnabled", int(actuated))
     xml.leaf("TempPeriod", 2 * math.pi / sim.omega if actuated else 0.0)
     xml.close("Thermal")
+    xml.comment("the largest size a voxel may take is 1 + GrowthAmplitude (0: voxels only shrink)")
+    xml.leaf("GrowthAmplitude", growth_amplitude)
+    xml.leaf("SaveTraces", 1)  # the centre of mass over time, in the fitness file
+    span = 2 * math.pi / sim.omega if actuated else sim.duration
+    xml.leaf("TimeBetweenTraces", min(span, sim.duration) / TRACES_PER_PERIOD)
     xml.close("Environment")
 
 
@@ -213,42 +245,13 @@ def _corner_count(filled: np.ndarray) -> int:
     return len(np.unique((cells[:, None, :] + offsets[None]).reshape(-1, 3), axis=0))
 
 
-def to_vxa(robot: Robot, grid: np.ndarray) -> bytes:
-    """`robot` (its simulated voxels `grid`, see softevo.core.export.voxel_grid) as a VXA."""
-    if not isinstance(robot, VoxelRobot):
-        raise ExportError(
-            "vxa needs a robot of voxel materials (soft, hard, sine, neg_sine): this robot's "
-            "springs carry their own materials, which Voxelyze cannot express (use glb or stl)"
-        )
-    if robot.phases is not None:
-        raise ExportError(
-            "vxa: this robot's voxels each have their own phase and amplitude (voxel-phase), "
-            "which Voxelyze's per-material actuation cannot express (use glb or stl)"
-        )
-    filled = grid != "empty"
-    table = material_table(robot, _corner_count(filled), int(filled.sum()))
-    sim = robot.sim
-    xml = _Xml()
-    xml.open("VXA", Version="1.1")
-    xml.comment(
-        "written by softevo from a softevo.robot/1 file; the mapping of its "
-        "springs to Voxelyze materials is first-order (softevo docs/export.md)"
-    )
-    if robot.actuation.a != 0:
-        xml.comment(
-            f"actuation gene a = {_number(robot.actuation.a)} (a constant rest-length offset of "
-            "the actuated voxels) has no Voxelyze equivalent and is left out"
-        )
-    _simulator(xml, sim)
-    _environment(xml, sim)
-    xml.open("VXC", Version="0.94")
-    xml.open("Lattice")
-    xml.leaf("Lattice_Dim", sim.edge_length)
-    xml.close("Lattice")
-    xml.open("Voxel")
-    xml.leaf("Vox_Name", "BOX")
-    xml.close("Voxel")
-    _palette(xml, table, sim)
+def value_layers(values: np.ndarray) -> list[str]:
+    """A per-voxel layer (PhaseOffset, ...): per z, comma-separated numbers of every (x, y), x
+    fastest then y, as evosoro's Voxelyze splits them (it reads those of filled voxels only)."""
+    return [",".join(_number(v) for v in values[:, :, z].T.ravel()) for z in range(values.shape[2])]
+
+
+def _structure(xml: _Xml, grid: np.ndarray, per_voxel: dict[str, np.ndarray]) -> None:
     xml.open("Structure", Compression="ASCII_READABLE")
     nx, ny, nz = grid.shape
     xml.leaf("X_Voxels", nx)
@@ -258,7 +261,58 @@ def to_vxa(robot: Robot, grid: np.ndarray) -> bytes:
     for layer in layers(grid):
         xml.cdata("Layer", layer)
     xml.close("Data")
+    for name, values in per_voxel.items():
+        xml.open(name)
+        for layer in value_layers(values):
+            xml.cdata("Layer", layer)
+        xml.close(name)
     xml.close("Structure")
+
+
+def _lifted(grid: np.ndarray, below: int) -> np.ndarray:
+    """`grid` with `below` empty layers under it (the drop height): "empty" or 0 in them."""
+    fill = "empty" if grid.dtype == object else 0.0
+    return np.pad(grid, ((0, 0), (0, 0), (below, 0)), constant_values=fill)
+
+
+def to_vxa(robot: Robot, grid: np.ndarray) -> bytes:
+    """`robot` (its simulated voxels `grid`, see softevo.core.export.voxel_grid) as a VXA that
+    evosoro's Voxelyze runs as it is, writing its fitness file (docs/export.md)."""
+    if not isinstance(robot, VoxelRobot):
+        raise ExportError(
+            "vxa needs a robot of voxel materials (soft, hard, sine, neg_sine): this robot's "
+            "springs carry their own materials, which Voxelyze cannot express (use glb or stl)"
+        )
+    filled = grid != "empty"
+    actuation = voxel_actuation(robot, grid)
+    table = material_table(robot, actuation, _corner_count(filled), int(filled.sum()))
+    sim = robot.sim
+    moduli = np.array([table[label]["Elastic_Mod"] for label in grid[filled]])
+    voxel_mass = table["soft"]["Density"] * sim.edge_length**3
+    below = drop_layers(robot)
+    xml = _Xml()
+    xml.open("VXA", Version="1.1")
+    xml.comment(
+        "written by softevo from a softevo.robot/1 file; the mapping of its "
+        "springs to Voxelyze materials is first-order (softevo docs/export.md)"
+    )
+    if abs(below * sim.edge_length - sim.drop_height) > 1e-9 * sim.edge_length:
+        xml.comment(
+            f"softevo drops this robot from {_number(sim.drop_height)} m; Voxelyze starts it on "
+            f"{below} empty layer(s), {_number(below * sim.edge_length)} m up"
+        )
+    _simulator(xml, sim, slow_damping(robot, moduli, voxel_mass))
+    _environment(xml, sim, actuation.growth_amplitude if actuation.actuated else 0.0)
+    xml.open("VXC", Version="0.94")
+    xml.open("Lattice")
+    xml.leaf("Lattice_Dim", sim.edge_length)
+    xml.close("Lattice")
+    xml.open("Voxel")
+    xml.leaf("Vox_Name", "BOX")
+    xml.close("Voxel")
+    _palette(xml, table, sim)
+    per_voxel = structure_layers(actuation, sim.duration)
+    _structure(xml, _lifted(grid, below), {k: _lifted(v, below) for k, v in per_voxel.items()})
     xml.close("VXC")
     xml.close("VXA")
     return xml.text()

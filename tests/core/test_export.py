@@ -101,9 +101,10 @@ def test_vxa_maps_stiffness_mass_actuation_and_friction() -> None:
     assert mechanical(root, "Active_+", "CTE") == pytest.approx(sim.amplitude_scale * 1.2)
     assert mechanical(root, "Active_-", "CTE") == pytest.approx(-sim.amplitude_scale * 1.2)
     assert mechanical(root, "Passive_Soft", "CTE") == 0.0
-    phase = mechanical(root, "Active_+", "MaterialTempPhase")
-    assert phase == pytest.approx((-1.0 / (2 * math.pi)) % 1.0)
-    # the same wave: sin(w t + c) == sin(2 pi (t / TempPeriod + phase)) at any t
+    # MaterialTempPhase in radians, as evosoro's Voxelyze adds it (UpdateCurTemp)
+    assert mechanical(root, "Active_+", "MaterialTempPhase") == pytest.approx(2 * math.pi - 1.0)
+    # the voxels' own phase, in periods: sin(w t + c) == sin(2 pi (t / TempPeriod + phase))
+    phase = float(root.findtext("./VXC/Structure/PhaseOffset/Layer").split(",")[2])
     period = float(thermal.findtext("TempPeriod"))
     for t in (0.0, 0.3, 1.7):
         expected = math.sin(4.0 * t - 1.0)
@@ -165,13 +166,12 @@ def test_vxa_refuses_robots_whose_springs_carry_the_materials(examples: Path) ->
         export_robot(robot, "vxa")
 
 
-def test_vxa_refuses_a_co_designed_robot_but_glb_and_stl_export_it() -> None:
+def test_vxa_glb_and_stl_export_a_co_designed_robot() -> None:
+    """voxel-phase robots were refused; their phases now go to Voxelyze's PhaseOffset layer."""
     labels = ("sine", "hard", "neg_sine", "soft")
     robot = VoxelRobot((4, 1, 1), labels, Actuation(0.1, 0.5, 0.0), sim_settings({}),
                        (0.0, 0.0, 1.0, 0.0), (0.5, 0.0, 0.5, 0.0))  # fmt: skip
-    with pytest.raises(ExportError, match="own phase and amplitude"):
-        export_robot(robot, "vxa")
-    for name in ("glb", "stl"):
+    for name in ("vxa", "glb", "stl"):
         assert len(export_robot(robot, name)) > 100
 
 
