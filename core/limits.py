@@ -26,6 +26,11 @@ MAX_REPLAY_POSITIONS = 1_000_000
 #: Most cells of a quality-diversity archive (the product of its `bins`) and most descriptors.
 MAX_ARCHIVE_CELLS = 10_000
 MAX_DESCRIPTORS = 3
+#: Shortest length of a terrain feature (m): a step's tread, a bar and the space between bars,
+#: a rough field's wavelength. A twentieth of the default voxel edge: finer, the features are
+#: far below what a robot's masses (one per voxel corner) can meet, and a drawn mesh or a
+#: cosine's argument grows without bound (a wavelength of 1e-300 m made every robot NaN).
+MIN_TERRAIN_LENGTH = 0.05
 #: Fewest and most frames per simulated second, most simulated seconds, of one moving picture.
 MIN_PICTURE_FPS = 0.5
 MAX_PICTURE_FPS = 30.0
