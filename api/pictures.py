@@ -2,8 +2,10 @@
 robot's simulation and a PNG thumbnail of it at rest.
 
 A movie simulates and draws dozens of frames, so it runs in the replays' own processes under
-their RUNNING_AT_ONCE bound (`softevo.api.replay.in_own_process`: the API process never loads
-the physics), within the service's picture limits (core/limits.py), and the last few are kept.
+their RUNNING_AT_ONCE bound, one picture at a time and one per client
+(`softevo.api.replay.in_own_process`: the API process never loads the physics), within the
+service's picture limits (core/limits.py), at a quantised fps and duration, and the last few are
+kept.
 A thumbnail needs no simulation (the robot at rest, a few milliseconds of drawing): it is drawn
 here and kept per (run, best individual), so the runs list costs one drawing per new best.
 """
@@ -15,7 +17,7 @@ import threading
 from collections import OrderedDict
 from typing import Any
 
-from softevo.api.replay import in_own_process
+from softevo.api.replay import fps_bucket, in_own_process
 from softevo.core import picture
 from softevo.core.robot_file import robot_to_json
 
@@ -34,17 +36,33 @@ class PictureUnsupportedError(RuntimeError):
     """The picture needs a program this server lacks (ffmpeg for MP4): 501, saying how to fix."""
 
 
-def movie(robot: Any, format: str, fps: float, seconds: float) -> bytes:
-    """The robot's simulation as GIF / MP4 bytes, remembered by (robot, format, fps, seconds)."""
+#: Frame rates a movie is drawn at (a request's fps goes to the nearest in ratio) and the step
+#: its duration is rounded to (s): 14.999 and 15 fps, 3 and 3.0001 s, share a movie.
+FPS_BUCKETS = (0.5, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 15.0)
+SECONDS_STEP = 0.5
+
+
+def quantise(fps: float, seconds: float) -> tuple[float, float]:
+    """The (fps, seconds) a movie asked for is drawn and remembered at."""
+    steps = max(1, round(seconds / SECONDS_STEP))
+    return fps_bucket(fps, FPS_BUCKETS), steps * SECONDS_STEP
+
+
+def movie(robot: Any, format: str, fps: float, seconds: float, client: str | None = None) -> bytes:
+    """The robot's simulation as GIF / MP4 bytes at `quantise`d settings, remembered by (robot,
+    format, fps, seconds); drawn in one of `client`'s picture slots (`softevo.api.replay.slot`)."""
     if format == "mp4" and not picture.ffmpeg_available():
         raise PictureUnsupportedError(picture.FFMPEG_MISSING)
+    fps, seconds = quantise(fps, seconds)
     robot_file = robot_to_json(robot)
     key = (json.dumps(robot_file, sort_keys=True), format, fps, seconds)
     with _lock:
         if key in _movies:
             _movies.move_to_end(key)
             return _movies[key]
-    data: bytes = in_own_process(picture.movie_from_file, robot_file, format, fps, seconds)
+    data: bytes = in_own_process(
+        picture.movie_from_file, robot_file, format, fps, seconds, client=client
+    )
     _remember(_movies, key, data, CACHED_MOVIES)
     return data
 

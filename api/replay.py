@@ -4,9 +4,9 @@ processes of the API's own, which hand back JSON bytes (the API only splices the
 
 A replay is asked for on a plain GET, so it is bounded: at most `MAX_POSITIONS` mass positions
 (`softevo.core.replay`), its fps rounded to a bucket, at most `RUNNING_AT_ONCE` simulated at
-the same moment (more are refused with 503, never queued on a request thread), and the last few
-kept within `CACHED_BYTES`, so a dashboard refreshing, or many people watching one run,
-simulates a robot once.
+the same moment, one of them per client and pictures in one of them only (more are refused with
+503, never queued on a request thread), and the last few kept within `CACHED_BYTES`, so a
+dashboard refreshing, or many people watching one run, simulates a robot once.
 """
 
 from __future__ import annotations
@@ -15,13 +15,14 @@ import json
 import math
 import multiprocessing
 import threading
-from collections import OrderedDict
-from collections.abc import Callable
+from collections import Counter, OrderedDict
+from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
 from typing import Any
 
-from fastapi import Response
+from fastapi import Request, Response
 
 from softevo.core.limits import MAX_REPLAY_POSITIONS
 from softevo.core.robot_file import robot_to_json
@@ -34,6 +35,11 @@ CACHED_BYTES = 256 * 2**20
 #: Replays simulated at the same moment; one more asked for is refused (503), not queued, so
 #: no request thread waits on a simulation and `/healthz` and the curve stay fast.
 RUNNING_AT_ONCE = 2
+#: Replays and pictures one client (its address) may have made at once, and pictures at once in
+#: all: a client looping on new parameters holds one slot at most, and the pictures leave a
+#: slot to the replays (the dashboard's viewer). Requests past either are refused (503).
+PER_CLIENT_AT_ONCE = 1
+PICTURES_AT_ONCE = 1
 #: Frame rates replays are recorded at: a request's fps is rounded to the nearest (in ratio), so
 #: any fps does not force a new simulation.
 FPS_BUCKETS = (0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 15.0, 20.0, 30.0, 60.0, 120.0)
@@ -45,6 +51,7 @@ _cache: OrderedDict[tuple[str, float], bytes] = OrderedDict()
 _lock = threading.Lock()
 _computing: dict[tuple[str, float], threading.Lock] = {}
 _slots = threading.BoundedSemaphore(RUNNING_AT_ONCE)
+_held: Counter[str | None] = Counter()  # slots held by each client; None: by the pictures
 
 
 class ReplayUnavailableError(RuntimeError):
@@ -61,12 +68,52 @@ def use_workers(remote: Remote | None) -> None:
     _remote = remote
 
 
-def fps_bucket(fps: float) -> float:
-    return min(FPS_BUCKETS, key=lambda bucket: abs(math.log(bucket / fps)))
+def fps_bucket(fps: float, buckets: tuple[float, ...] = FPS_BUCKETS) -> float:
+    """The bucket nearest `fps` in ratio (14.999 and 15 share 15)."""
+    return min(buckets, key=lambda bucket: abs(math.log(bucket / fps)))
 
 
-def replay(robot: Any, fps: float) -> bytes:
-    """Frames at (up to) `fps` per simulated second, rounded to a bucket, as JSON bytes."""
+@contextmanager
+def slot(client: str | None, picture: bool = False) -> Iterator[None]:
+    """One of the RUNNING_AT_ONCE slots for `client` (its address; None: unknown, not counted
+    per client) for the time of the block, or ReplayBusyError (503) saying which bound is full:
+    the client's own (PER_CLIENT_AT_ONCE), the pictures' (PICTURES_AT_ONCE) or all of them."""
+    with _lock:
+        if client is not None and _held[client] >= PER_CLIENT_AT_ONCE:
+            raise ReplayBusyError(
+                f"{PER_CLIENT_AT_ONCE} replay or picture you asked for is being made; ask for "
+                "the next when it is done"
+            )
+        if picture and _held[None] >= PICTURES_AT_ONCE:
+            raise ReplayBusyError(
+                f"{PICTURES_AT_ONCE} picture is being drawn; try again in a few seconds"
+            )
+        if not _slots.acquire(blocking=False):
+            raise ReplayBusyError(
+                f"{RUNNING_AT_ONCE} replays are being simulated; try again in a few seconds"
+            )
+        holders = [who for who in (client,) if who is not None] + ([None] if picture else [])
+        _held.update(holders)
+    try:
+        yield
+    finally:
+        with _lock:
+            _held.subtract(holders)
+            for who in holders:
+                if _held[who] <= 0:
+                    del _held[who]
+        _slots.release()
+
+
+def client_address(request: Request) -> str | None:
+    """Who asks, for the per-client bound: the peer's address (behind a proxy, the address
+    uvicorn's --proxy-headers gives), None when the server knows none."""
+    return request.client.host if request.client else None
+
+
+def replay(robot: Any, fps: float, client: str | None = None) -> bytes:
+    """Frames at (up to) `fps` per simulated second, rounded to a bucket, as JSON bytes;
+    simulated in one of `client`'s slots (`slot`) unless remembered."""
     key = _key(robot, fps)
     fps = key[1]
     with _lock:
@@ -78,28 +125,21 @@ def replay(robot: Any, fps: float) -> bytes:
         with _lock:
             if key in _cache:
                 return _cache[key]
-        if not _slots.acquire(blocking=False):
-            with _lock:
-                _computing.pop(key, None)
-            raise ReplayBusyError(
-                f"{RUNNING_AT_ONCE} replays are being simulated; try again in a few seconds"
-            )
         try:
-            data = _simulate(robot, fps)
+            with slot(client):
+                data = _simulate(robot, fps)
         except BaseException:
             with _lock:
                 _computing.pop(key, None)
             raise
-        finally:
-            _slots.release()
         _remember(key, data)
     return data
 
 
-def replay_response(robot: Any, fps: float, **head: Any) -> Response:
+def replay_response(robot: Any, fps: float, client: str | None, **head: Any) -> Response:
     """The replay as a JSON response, `head` (run id, fitness, ...) first: bytes spliced, never
     a million positions turned into objects in this process (that would stall its event loop)."""
-    encoded = replay(robot, fps)
+    encoded = replay(robot, fps, client)
     prefix = json.dumps(head, separators=(",", ":"), allow_nan=False)[:-1].encode()
     body = encoded if not head else prefix + b"," + encoded[1:]
     return Response(content=body, media_type="application/json")
@@ -164,17 +204,12 @@ def shutdown() -> None:
         pool.shutdown(wait=False, cancel_futures=True)
 
 
-def in_own_process(function: Callable[..., Any], *args: Any) -> Any:
-    """`function(*args)` in one of the replays' processes, counted against RUNNING_AT_ONCE like a
-    replay (one more is refused with ReplayBusyError, never queued on a request thread)."""
-    if not _slots.acquire(blocking=False):
-        raise ReplayBusyError(
-            f"{RUNNING_AT_ONCE} replays are being simulated; try again in a few seconds"
-        )
-    try:
-        return _processes().submit(function, *args).result()
-    except BrokenProcessPool:
-        shutdown()
-        raise ReplayUnavailableError("the replay's process died (out of memory?)") from None
-    finally:
-        _slots.release()
+def in_own_process(function: Callable[..., Any], *args: Any, client: str | None = None) -> Any:
+    """`function(*args)` (a picture) in one of the replays' processes, in a picture's slot of
+    `client`'s (`slot`): past a bound, ReplayBusyError, never queued on a request thread."""
+    with slot(client, picture=True):
+        try:
+            return _processes().submit(function, *args).result()
+        except BrokenProcessPool:
+            shutdown()
+            raise ReplayUnavailableError("the replay's process died (out of memory?)") from None

@@ -15,7 +15,7 @@ from softevo.api.db import Database
 from softevo.api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TokenDep
 from softevo.api.events import event_stream
 from softevo.api.export import FILE_CONTENT, FormatQuery, file_response
-from softevo.api.replay import replay_response
+from softevo.api.replay import client_address, replay_response
 from softevo.api.routes.meta import idle_workers
 from softevo.api.schemas import (
     Curve,
@@ -245,13 +245,16 @@ def get_best(run_id: RunId, db: DatabaseDep, format: FormatQuery = None) -> Any:
 def get_replay(
     run_id: RunId,
     db: DatabaseDep,
+    request: Request,
     fps: Annotated[float, Query(ge=0.1, le=120)] = 30.0,
 ) -> Response:
-    """Frames of mass positions (and the springs) of the best robot, for a 3D viewer."""
+    """Frames of mass positions (and the springs) of the best robot, for a 3D viewer (one
+    simulated at a time per client: 503 for a second while the first is)."""
     robot, best = best_robot(db, run_id)
     return replay_response(
-        robot, fps, run_id=run_id, fitness=best["fitness"], generation=best["generation"]
-    )
+        robot, fps, client_address(request), run_id=run_id, fitness=best["fitness"],
+        generation=best["generation"],
+    )  # fmt: skip
 
 
 _EVENT_ID = re.compile(r"-?[0-9]{1,10}")

@@ -11,11 +11,11 @@ import io
 import threading
 from typing import Annotated, Any, Literal
 
-from fastapi import APIRouter, Path, Query, Response
+from fastapi import APIRouter, Path, Query, Request, Response
 
 from softevo.api import pictures, store
 from softevo.api.deps import DatabaseDep
-from softevo.api.replay import replay_response
+from softevo.api.replay import client_address, replay_response
 from softevo.api.routes.runs import NOT_FOUND, RunId, best_robot
 from softevo.api.schemas import Message
 from softevo.core.config import RunConfig
@@ -36,6 +36,7 @@ def get_individual_replay(
     run_id: RunId,
     number: Annotated[int, Path(ge=0, le=2**31 - 1, description="generation * P + index")],
     db: DatabaseDep,
+    request: Request,
     fps: Fps = 30.0,
 ) -> Response:
     """Frames of mass positions (and the springs) of individual `number`, for a 3D viewer."""
@@ -44,8 +45,8 @@ def get_individual_replay(
     config = RunConfig.model_validate(run.config)
     robot = config.make_encoding().to_robot(Genome.from_json(data["genome"]), config.sim)
     return replay_response(
-        robot, fps, run_id=run_id, number=number, generation=data["generation"],
-        fitness=data["fitness"],
+        robot, fps, client_address(request), run_id=run_id, number=number,
+        generation=data["generation"], fitness=data["fitness"],
     )  # fmt: skip
 
 
@@ -103,13 +104,17 @@ def get_best_movie(
     run_id: RunId,
     format: Literal["gif", "mp4"],
     db: DatabaseDep,
+    request: Request,
     fps: PictureFps = FPS,
     duration: PictureSeconds = SECONDS,
 ) -> Response:
     """The best robot's simulation drawn as shaded voxels, the camera following it: a GIF, or an
-    MP4 where the server has ffmpeg (501 otherwise). Rendered on request, then remembered."""
+    MP4 where the server has ffmpeg (501 otherwise). Drawn on request at the nearest of the frame
+    rates 0.5, 1, 2, 3, 4, 5, 6, 8, 10, 12, 15 and the duration rounded to 0.5 s, then
+    remembered; one picture is drawn at a time, and one replay or picture per client (503)."""
     robot, _best = best_robot(db, run_id)
-    return Response(pictures.movie(robot, format, fps, duration), media_type=MEDIA_TYPES[format])
+    data = pictures.movie(robot, format, fps, duration, client_address(request))
+    return Response(data, media_type=MEDIA_TYPES[format])
 
 
 @router.get(

@@ -433,8 +433,11 @@ def test_replays_share_fps_buckets_run_two_at_once_and_keep_to_a_byte_budget(
     url = f"/runs/{run_id}/best/replay"
     first = client.get(url, params={"fps": 29}).json()
     assert client.get(url, params={"fps": 31}).json() == first and calls == [30.0]
-    held = [threading.Thread(target=client.get, args=(url,), kwargs={"params": {"fps": f}})
-            for f in (0.1, 0.2)]  # fmt: skip
+    others = [TestClient(client.app, client=(f"10.0.0.{n}", 50000)) for n in (1, 2)]  # a slot each
+    held = [
+        threading.Thread(target=other.get, args=(url,), kwargs={"params": {"fps": f}})
+        for other, f in zip(others, (0.1, 0.2), strict=True)
+    ]
     for thread in held:
         thread.start()
     deadline = time.monotonic() + 30
