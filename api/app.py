@@ -29,7 +29,7 @@ from softevo.api.db import Database, alembic_config, current_revision
 from softevo.api.events import TooManyClientsError, Watches
 from softevo.api.routes import archive, meta, runs, sweeps, views
 from softevo.api.settings import Settings, get_settings
-from softevo.api.validation import RequestError
+from softevo.api.validation import RequestError, point_to_sim
 from softevo.core.evaluator import Evaluator
 
 log = logging.getLogger("softevo.api")
@@ -164,7 +164,9 @@ def _install_error_handlers(app: FastAPI) -> None:
     @app.exception_handler(RequestValidationError)
     async def invalid(request: Request, error: RequestValidationError) -> JSONResponse:
         detail = [
-            {"loc": list(e.get("loc", ())), "msg": str(e.get("msg", "")), "type": e.get("type")}
+            point_to_sim(
+                {"loc": list(e.get("loc", ())), "msg": str(e.get("msg", "")), "type": e.get("type")}
+            )
             for e in error.errors()
         ]
         return JSONResponse({"detail": not_json(request, detail) or detail}, status_code=422)

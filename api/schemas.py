@@ -10,12 +10,13 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, create_model
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, StrictInt, create_model
 
 from softevo.core.config import PAPER_NINE_SHAPES, parse_shape
 from softevo.core.ga.algorithm import GAConfig
 from softevo.core.limits import MAX_SIDE
 from softevo.core.objectives import Objective
+from softevo.core.settings import SimSettings
 from softevo.core.status import IndividualStatus, RunStatus
 from softevo.core.tasks import TASKS
 from softevo.core.terrain import Terrain
@@ -36,14 +37,30 @@ Seed = Annotated[int, Field(ge=0, le=2**63 - 1, strict=True)]
 Number = Annotated[float, Field(strict=True)]
 
 
+def _sim_field(name: str, info: Any) -> Any:
+    """A simulation setting as a body field: optional, a strict number with its bounds, or the
+    terrain (validated as a terrain alone, so its errors name its own fields)."""
+    if name == "terrain":
+        return (Terrain | None, Field(None, description=info.description))
+    annotation = Annotated[float, *info.metadata, Field(strict=True)]
+    return (annotation | None, Field(None, description=info.description))
+
+
+#: The simulation settings to override (None: the preset's value), bounds in the schema.
+SimOverrides = create_model(
+    "SimOverrides",
+    __config__=ConfigDict(extra="forbid"),
+    **{name: _sim_field(name, info) for name, info in SimSettings.model_fields.items()},
+)
+
+
 class _RunSettings(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     preset: str = Field("paper-voxel", description="preset whose settings the others override")
     encoding: Literal["voxel", "voxel-phase", "cube-springs", "spring"] | None = None
-    sim: dict[str, Number | Terrain] | None = Field(
+    sim: SimOverrides | None = Field(  # type: ignore[valid-type]
         None,
-        max_length=32,
         description="simulation settings to override; `terrain` takes an object such as "
         '{"kind": "slope", "angle_deg": 10} (docs/tasks.md)',
     )
@@ -56,10 +73,12 @@ class _RunSettings(BaseModel):
 
 
 def _optional(info: Any) -> Any:
-    """A GA setting as a body field: optional, its bounds kept, strict if it is a number."""
+    """A GA setting as a body field: optional, its bounds kept, strict if it is a number (and
+    counts such as `bins` integers: not true, not 4.0)."""
     strict = [Field(strict=True)] if info.annotation in (int, float, bool) else []
     metadata = [*info.metadata, *strict]
-    annotation = Annotated[info.annotation, *metadata] if metadata else info.annotation
+    base = tuple[StrictInt, ...] if info.annotation == tuple[int, ...] else info.annotation
+    annotation = Annotated[base, *metadata] if metadata else base
     return (annotation | None, Field(None, description=info.description))
 
 
@@ -160,6 +179,13 @@ class IndividualPublic(BaseModel):
     generation: int
     index: int
     fitness: float | None
+    measures: dict[str, float | None] | None = Field(
+        description="what the simulation measured, by name (docs/physics.md, \"Measures and "
+        "objectives\"): speed, forward_speed, climb_rate, distance, heading, energy, "
+        "cost_of_transport, efficiency, stable (1 or 0), ...; null for a value not measured "
+        "(energy, unless the objective needs it), {} for a robot that could not be built, null "
+        "while pending. Rows stored before revision 0004 hold the fitness's measure and heading"
+    )
     status: IndividualStatus
     operator: str
     parents: list[int]

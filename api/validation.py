@@ -13,6 +13,7 @@ from typing import Any
 from softevo.api.cost import total_cost
 from softevo.api.settings import Limits
 from softevo.core.config import ConfigError, RunConfig, resolve
+from softevo.core.settings import SimSettings
 
 _FIELD = re.compile(r"^([A-Za-z_][\w.]*): ")
 
@@ -85,3 +86,17 @@ def check_limits(config: RunConfig, limits: Limits, prefix: tuple[str, ...] = ()
     if evaluations > limits.max_evaluations:
         refuse(["generations"], f"population x generations = {evaluations} is over the limit "
                f"of {limits.max_evaluations} (SOFTEVO_MAX_EVALUATIONS)")  # fmt: skip
+
+
+def point_to_sim(problem: dict[str, Any]) -> dict[str, Any]:
+    """A simulation setting sent at the top of a run or sweep body (`terrain`, `dt`) is refused
+    as an extra input; say where it goes instead of only "Extra inputs are not permitted"."""
+    loc = problem.get("loc", [])
+    if problem.get("type") == "extra_forbidden" and len(loc) == 2 and loc[0] == "body":
+        name = loc[1]
+        if name in SimSettings.model_fields:
+            message = (
+                f'{name}: a simulation setting, so it goes inside sim: {{"sim": {{"{name}": ...}}}}'
+            )
+            return {**problem, "msg": message}
+    return problem

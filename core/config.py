@@ -180,6 +180,13 @@ def resolve(request: dict[str, Any]) -> RunConfig:
     preset = request.get("preset", "paper-voxel")
     if preset not in PRESETS:
         raise ConfigError(f"preset: unknown preset {preset!r} (known: {', '.join(PRESETS)})")
+    misplaced = sorted(set(request) & set(SimSettings.model_fields))
+    if misplaced:  # a simulation setting at the top: say where it goes
+        name = misplaced[0]
+        raise ConfigError(
+            f"{name}: a simulation setting, so it goes inside sim: "
+            f'{{"sim": {{"{name}": ...}}}} (sim.{name})'
+        )
     merged = {**PRESETS[preset], **request, "preset": preset}
     sim_overrides = request.get("sim", {})
     if not isinstance(sim_overrides, dict):

@@ -100,12 +100,23 @@ def sim_settings(
 
 
 def format_validation_error(error: ValidationError, prefix: str = "") -> str:
-    """One line naming the first offending field, e.g. `sim.dt: Input should be greater than 0`."""
-    first = error.errors()[0]
-    location = ".".join(str(part) for part in (prefix, *first["loc"]) if part != "")
-    message = first["msg"].removeprefix("Value error, ")
-    more = len(error.errors()) - 1
-    suffix = f" (and {more} more problem{'s' if more > 1 else ''})" if more else ""
-    if not location:  # a model-level check: its message starts with the field it is about
-        return f"{message}{suffix}"
-    return f"{location}: {message}{suffix}"
+    """One line naming every offending field, e.g. `sim.dt: Input should be greater than 0;
+    sim.mass: ...`: each problem is listed, none hidden behind a count."""
+    return "; ".join(_problem(problem, prefix) for problem in error.errors())
+
+
+#: Where pydantic puts the chosen kind of a tagged union in an error's location (`sim.terrain.
+#: steps.depth`): left out, so the field reads as it is written (`sim.terrain.depth`).
+_TAGGED = {"terrain": {"flat", "slope", "steps", "rough", "hurdles"}}
+
+
+def _problem(problem: Any, prefix: str) -> str:
+    parts = [str(part) for part in (prefix, *problem["loc"]) if part != ""]
+    parts = [p for i, p in enumerate(parts) if not (i and p in _TAGGED.get(parts[i - 1], ()))]
+    message = problem["msg"].removeprefix("Value error, ")
+    field, _, rest = message.partition(": ")
+    if parts and rest and field.isidentifier():  # a model-level check that names its field
+        parts, message = [*parts, field], rest
+    if not parts:
+        return message
+    return f"{'.'.join(parts)}: {message}"

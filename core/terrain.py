@@ -24,7 +24,9 @@ from functools import lru_cache
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from softevo.core.limits import MIN_TERRAIN_LENGTH
 
 #: Kind codes the kernels branch on (FLAT keeps the flat ground's original arithmetic).
 FLAT, SLOPE, STEPS, ROUGH, HURDLES = 0, 1, 2, 3, 4
@@ -118,8 +120,10 @@ class Slope(BaseModel):
 class Steps(BaseModel):
     model_config = _MODEL
     kind: Literal["steps"] = "steps"
-    height: float = Field(description="rise of each step (m)", gt=0, le=100)
-    depth: float = Field(description="tread of each step along x (m)", gt=0, le=1000)
+    height: float = Field(0.2, description="rise of each step (m)", gt=0, le=100)
+    depth: float = Field(
+        4.15, description="tread of each step along x (m)", ge=MIN_TERRAIN_LENGTH, le=1000
+    )
 
     @property
     def code(self) -> int:
@@ -136,8 +140,12 @@ class Steps(BaseModel):
 class Rough(BaseModel):
     model_config = _MODEL
     kind: Literal["rough"] = "rough"
-    amplitude: float = Field(description="largest height above or below z = 0 (m)", gt=0, le=100)
-    wavelength: float = Field(description="wavelength of the field's cosines (m)", gt=0, le=1000)
+    amplitude: float = Field(
+        0.2, description="largest height above or below z = 0 (m)", gt=0, le=100
+    )
+    wavelength: float = Field(
+        3.0, description="wavelength of the field's cosines (m)", ge=MIN_TERRAIN_LENGTH, le=1000
+    )
     seed: int = Field(0, ge=0, le=2**32 - 1, description="the field's random directions, phases")
 
     @property
@@ -178,9 +186,22 @@ def _waves(amplitude: float, wavelength: float, seed: int) -> np.ndarray:
 class Hurdles(BaseModel):
     model_config = _MODEL
     kind: Literal["hurdles"] = "hurdles"
-    height: float = Field(description="height of each bar (m)", gt=0, le=100)
-    spacing: float = Field(description="distance between bars' front faces (m)", gt=0, le=1000)
-    width: float = Field(description="length of each bar along x (m)", gt=0, le=1000)
+    height: float = Field(0.15, description="height of each bar (m)", gt=0, le=100)
+    spacing: float = Field(
+        4.15, description="distance between bars' front faces (m)", ge=MIN_TERRAIN_LENGTH, le=1000
+    )
+    width: float = Field(
+        0.5, description="length of each bar along x (m)", ge=MIN_TERRAIN_LENGTH, le=1000
+    )
+
+    @model_validator(mode="after")
+    def _gaps(self) -> Hurdles:
+        if self.width >= self.spacing:
+            raise ValueError(
+                f"width: a bar ({self.width} m) must be shorter than the spacing "
+                f"({self.spacing} m), or there is no ground between bars"
+            )
+        return self
 
     @property
     def code(self) -> int:

@@ -44,7 +44,7 @@ def test_a_run_on_a_slope_is_scored_by_its_objective(client: TestClient) -> None
     ("change", "field"),
     [
         ({"sim": {"terrain": {"kind": "stairs"}}}, "terrain"),
-        ({"sim": {"terrain": {"kind": "steps", "height": 0.2}}}, "depth"),
+        ({"sim": {"terrain": {"kind": "steps", "height": 0.2, "depth": 0.0}}}, "depth"),
         ({"objective": "fastest"}, "objective"),
     ],
 )

@@ -88,7 +88,7 @@ def test_shipped_examples_load(examples: Path) -> None:
         ({"sim": {"gravity": math.inf}}, "sim.gravity", "finite"),
         ({"sim": {"dt": "0.001"}}, "sim.dt", "valid number"),
         ({"sim": {"wind": 3}}, "sim.wind", "Extra inputs"),
-        ({"sim": {"settle_time": 5.0, "duration": 2.0}}, "sim", "settle_time"),
+        ({"sim": {"settle_time": 5.0, "duration": 2.0}}, "sim.settle_time", "shorter than"),
     ],
 )
 def test_bad_voxel_files_are_refused_naming_the_field(
