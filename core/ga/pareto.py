@@ -61,13 +61,13 @@ def domination_matrix(values: np.ndarray) -> np.ndarray:
     temporary: meant for populations (thousands), not for the whole history of a run."""
     array = _as_values(values)
     n = len(array)
-    at_least, better = np.ones((n, n), dtype=bool), np.zeros((n, n), dtype=bool)
+    at_least, scratch = np.ones((n, n), dtype=bool), np.empty((n, n), dtype=bool)
     for column in array.T:  # one objective at a time keeps the temporaries at N^2
-        at_least &= column[:, None] >= column[None, :]
-        better |= column[:, None] > column[None, :]
-    return (
-        at_least & better
-    )  # NaN compares false: a failed row dominates, and is dominated by, none
+        np.greater_equal(column[:, None], column[None, :], out=scratch)
+        at_least &= scratch
+    # i >= j everywhere and not j >= i everywhere (so > somewhere); NaN compares false, so a
+    # failed row dominates, and is dominated by, none
+    return at_least & ~at_least.T
 
 
 def nondominated_ranks(values: np.ndarray) -> np.ndarray:
