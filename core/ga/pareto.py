@@ -65,9 +65,12 @@ def domination_matrix(values: np.ndarray) -> np.ndarray:
     for column in array.T:  # one objective at a time keeps the temporaries at N^2
         np.greater_equal(column[:, None], column[None, :], out=scratch)
         at_least &= scratch
-    # i >= j everywhere and not j >= i everywhere (so > somewhere); NaN compares false, so a
-    # failed row dominates, and is dominated by, none
-    return at_least & ~at_least.T
+    # i >= j everywhere dominates unless j >= i everywhere too, i.e. unless they are copies (a
+    # cheaper test than the transpose); NaN compares false: a failed row dominates none
+    copy_of = np.unique(array, axis=0, return_inverse=True)[1].ravel()
+    np.not_equal(copy_of[:, None], copy_of[None, :], out=scratch)
+    at_least &= scratch
+    return at_least
 
 
 def nondominated_ranks(values: np.ndarray) -> np.ndarray:

@@ -84,6 +84,13 @@ def test_copies_share_a_front_and_a_dominated_row_is_one_front_behind() -> None:
     assert pareto.dominates([1, 1], [0, 1]) and not pareto.dominates([1, 1], [1, 1])
 
 
+def test_the_domination_matrix_is_dominance_pair_by_pair() -> None:
+    values = np.random.default_rng(5).integers(0, 3, size=(60, 3)).astype(float)  # many copies
+    values[7] = np.nan
+    expected = [[pareto.dominates(a, b) for b in values] for a in values]
+    np.testing.assert_array_equal(pareto.domination_matrix(values), expected)
+
+
 def test_the_front_of_many_rows_in_three_objectives_spans_several_blocks() -> None:
     rng = np.random.default_rng(7)
     values = rng.normal(size=(1500, 3))  # three blocks of 512 rows
