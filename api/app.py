@@ -27,6 +27,7 @@ from softevo.api.body_limit import BodyLimitMiddleware
 from softevo.api.coordinator import Coordinator
 from softevo.api.db import Database, alembic_config, current_revision
 from softevo.api.events import TooManyClientsError, Watches
+from softevo.api.read_token import ReadTokenMiddleware
 from softevo.api.routes import archive, meta, runs, sweeps, views
 from softevo.api.settings import Settings, get_settings
 from softevo.api.validation import RequestError, point_to_sim
@@ -124,6 +125,8 @@ def create_app(
         redoc_url=None,  # ReDoc loads its script from a CDN
     )
     app.add_middleware(BodyLimitMiddleware, max_bytes=settings.limits.max_body_bytes)
+    if settings.protect_reads and settings.api_token:  # outermost: a refused read costs nothing
+        app.add_middleware(ReadTokenMiddleware, token=settings.api_token)
     app.include_router(runs.router)
     app.include_router(archive.router)
     app.include_router(views.router)

@@ -1,7 +1,8 @@
 """Service settings, read once from the environment (`SOFTEVO_*`) by `get_settings()`.
 
 Every setting has a default that runs a real experiment on a fresh machine: SQLite in
-`./softevo.db`, an in-process worker pool, no token. Ceilings bound what one `POST /runs` may ask
+`./softevo.db`, an in-process worker pool, no token (and reads open: SOFTEVO_PROTECT_READS=1
+closes them with the token). Ceilings bound what one `POST /runs` may ask
 for, so a request that would occupy the service for days is refused before anything is queued.
 """
 
@@ -49,6 +50,7 @@ class Settings:
     database_url: str = DEFAULT_DATABASE_URL
     redis_url: str | None = None
     api_token: str | None = None
+    protect_reads: bool = False  # every GET needs api_token too (but /healthz and the dashboard)
     max_running: int = 2  # runs driven at once by this process; the rest wait, queued
     workers: int | None = None  # in-process pool size (default: one per core)
     batch_size: int = BATCH_SIZE  # robots per evaluator call
@@ -86,6 +88,10 @@ class Settings:
             raise ValueError("SOFTEVO_MAX_QUEUED must be >= 1, SOFTEVO_MAX_BODY_BYTES >= 1024")
         if not 1 <= settings.limits.max_voxels <= MAX_VOXELS:
             raise ValueError(f"SOFTEVO_MAX_VOXELS: must be between 1 and {MAX_VOXELS}")
+        if settings.protect_reads and not settings.api_token:
+            raise ValueError(
+                "SOFTEVO_PROTECT_READS=1 needs SOFTEVO_API_TOKEN: the token reads are closed with"
+            )
         if settings.workers is not None and settings.workers < 1:
             raise ValueError("SOFTEVO_WORKERS: must be >= 1")
         if settings.lease_seconds <= 0 or settings.poll_seconds <= 0:
@@ -98,8 +104,16 @@ class Settings:
         return settings
 
 
+_SWITCH = {"1": True, "true": True, "yes": True, "on": True,
+           "0": False, "false": False, "no": False, "off": False}  # fmt: skip
+
+
 def _parse(name: str, raw: str, kind: object) -> object:
     kind = str(kind)
+    if kind == "bool":
+        if raw.strip().lower() not in _SWITCH:
+            raise ValueError(f"{name}: expected 1 or 0 (true or false), got {raw!r}")
+        return _SWITCH[raw.strip().lower()]
     try:
         if "int" in kind:
             return int(raw)

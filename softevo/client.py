@@ -72,7 +72,8 @@ def _message(response: httpx.Response) -> str:
 
 class Client:
     """One service: `url` like http://127.0.0.1:8000; `token` is sent as `Authorization:
-    Bearer <token>` (what a service with SOFTEVO_API_TOKEN asks of every POST)."""
+    Bearer <token>` with every request (what a service with SOFTEVO_API_TOKEN asks of every
+    POST, and with SOFTEVO_PROTECT_READS=1 of every GET too)."""
 
     def __init__(self, url: str, token: str | None = None, timeout: float = 60.0) -> None:
         self.url = url.rstrip("/")

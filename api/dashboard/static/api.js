@@ -5,8 +5,16 @@ export const softevo = (window.softevo = { charts: {}, dots: 0, replay: null, vi
 export const view = document.getElementById("view");
 const tokenInput = document.getElementById("token");
 tokenInput.value = localStorage.getItem("softevo-token") || "";
+// The token also as a cookie: a service with SOFTEVO_PROTECT_READS=1 asks it of every read, and
+// the browser adds no header to the pictures, links and event stream it fetches itself.
+const setCookie = () => {
+  document.cookie = `softevo_token=${encodeURIComponent(tokenInput.value)}; path=/; SameSite=Strict`
+    + (tokenInput.value ? "" : "; max-age=0");
+};
+setCookie();
 tokenInput.addEventListener("change", () => {
   localStorage.setItem("softevo-token", tokenInput.value);
+  setCookie();
   tokenInput.classList.remove("wanted");
 });
 
@@ -16,10 +24,15 @@ export function onLeave(fn) { cleanup.push(fn); }
 export async function api(path, options = {}) {
   const headers = { ...(options.headers || {}) };
   if (options.body) headers["Content-Type"] = "application/json";
-  if (tokenInput.value && options.method && options.method !== "GET") {
-    headers.Authorization = `Bearer ${tokenInput.value}`;
+  if (tokenInput.value) headers.Authorization = `Bearer ${tokenInput.value}`;  // reads may need it too
+  let response = await fetch(path, { ...options, headers });
+  // a read refused for a moment (this page's other replay is being simulated): ask again
+  for (let tries = 0; response.status === 503 && !options.method && tries < 5; tries++) {
+    const wait = Number(response.headers.get("Retry-After"));
+    if (!wait) break;
+    await new Promise((resolve) => setTimeout(resolve, wait * 1000));
+    response = await fetch(path, { ...options, headers });
   }
-  const response = await fetch(path, { ...options, headers });
   const body = response.headers.get("content-type")?.includes("json") ? await response.json() : null;
   if (!response.ok) {
     const detail = body?.detail;
