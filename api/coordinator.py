@@ -31,7 +31,7 @@ from softevo.api.faults import Faults
 from softevo.api.store.driving import GenerationCommit, Landed, Lease, LeaseLostError
 from softevo.core.config import RunConfig
 from softevo.core.evaluator import BatchResult, Evaluator
-from softevo.core.ga.algorithm import GAState, GeneticAlgorithm, Individual
+from softevo.core.ga.algorithm import GAState, Individual, make_strategy
 from softevo.core.ga.state import parents_text
 from softevo.core.generation import Engine, Hooks, Step
 from softevo.core.limits import BATCH_SIZE, IN_FLIGHT, SAVE_SECONDS
@@ -100,7 +100,7 @@ class RunDriver(Hooks):
 
     def individuals(
         self, generation: int, individuals: list[Individual]
-    ) -> tuple[dict[int, float], dict[int, float]]:
+    ) -> tuple[dict[int, float], dict[int, dict[str, float]]]:
         if generation == self.kept:  # kept by this driver's last commit, nothing evaluated since
             return {}, {}
         self.written = time.monotonic()
@@ -108,9 +108,9 @@ class RunDriver(Hooks):
 
     def batch(self, generation: int, indices: list[int], result: BatchResult) -> None:
         fitness = dict(zip(indices, result.fitness.tolist(), strict=True))
-        heading = dict(zip(indices, result.headings().tolist(), strict=True))
+        measures = dict(zip(indices, result.records(), strict=True))
         seconds_each = result.seconds / max(1, len(indices))
-        self.landed.append(Landed(fitness, result.worker, seconds_each, heading))
+        self.landed.append(Landed(fitness, result.worker, seconds_each, measures))
         if self._due():
             self._save(generation)
 
@@ -181,16 +181,16 @@ class RunDriver(Hooks):
     def _drive(self) -> None:
         stored_config, stored_state = store.driving.load(self.db, self.run_id)
         config = RunConfig.model_validate(stored_config)
-        algorithm = GeneticAlgorithm(config.ga_config(), config.make_encoding())
+        algorithm = make_strategy(config.ga_config(), config.make_encoding())
         engine = Engine(
             algorithm, config.sim, self.driving.batch_size, self.driving.in_flight, config.objective
         )
         state = GAState.from_json(stored_state) if stored_state else algorithm.start(config.seed)
-        cache, headings = store.driving.known_fitness(self.db, self.run_id, state.generation)
+        cache, measures = store.driving.known_fitness(self.db, self.run_id, state.generation)
         while not algorithm.done(state):
             self.check()
             self.generation = state.generation
-            step = engine.step(state, cache, self.driving.evaluator, self, self.key, headings)
+            step = engine.step(state, cache, self.driving.evaluator, self, self.key, measures)
             state = step.state
             upcoming: list[Individual] = []
             if not algorithm.done(state):  # bred now, kept by the same commit
@@ -210,9 +210,9 @@ class RunDriver(Hooks):
                 for index, value in enumerate(step.fitness.tolist())
                 if index not in step.evaluated
             },
-            cached_heading={
-                index: value
-                for index, value in enumerate(step.heading.tolist())
+            cached_measures={
+                index: record
+                for index, record in enumerate(step.measures)
                 if index not in step.evaluated
             },
             landed=self.landed,

@@ -15,7 +15,7 @@ from typing import Any
 
 from softevo.core.config import RunConfig
 from softevo.core.evaluator import Evaluator
-from softevo.core.ga.algorithm import GAState, GeneticAlgorithm, Individual
+from softevo.core.ga.algorithm import GAState, Individual, Strategy, make_strategy
 from softevo.core.ga.stats import CURVE_COLUMNS, QD_COLUMNS, GenerationStats
 from softevo.core.generation import Engine
 from softevo.core.robot import Robot
@@ -38,21 +38,21 @@ class Progress:
 
 @dataclass
 class Evolution:
-    """A run in progress in this process: its engine, state, fitness cache (and the measured
-    headings beside it) and counters."""
+    """A run in progress in this process: its engine, state, fitness cache (and each genome's
+    record of measures beside it) and counters."""
 
     config: RunConfig
     engine: Engine
     state: GAState
     cache: dict[str, float] = field(default_factory=dict)
-    headings: dict[str, float] = field(default_factory=dict)
+    measures: dict[str, dict[str, float]] = field(default_factory=dict)
     evaluations: int = 0
     saved: int = 0
     elapsed: float = 0.0
 
     @classmethod
     def start(cls, config: RunConfig) -> Evolution:
-        algorithm = GeneticAlgorithm(config.ga_config(), config.make_encoding())
+        algorithm = make_strategy(config.ga_config(), config.make_encoding())
         return cls(
             config=config,
             engine=Engine(algorithm, config.sim, objective=config.objective),
@@ -66,10 +66,10 @@ class Evolution:
         state: GAState,
         cache: dict[str, float],
         elapsed: float = 0.0,
-        headings: dict[str, float] | None = None,
+        measures: dict[str, dict[str, float]] | None = None,
     ) -> Evolution:
-        """A stopped run, going on from its state and fitness cache (and headings, for the
-        `heading` descriptor): the generations still to run are those an uninterrupted run
+        """A stopped run, going on from its state and fitness cache (and measures, which
+        behavioural descriptors read): the generations still to run are those an uninterrupted run
         would have run (breeding depends on the seed and the stored generation only), and with
         the cache so are their counts."""
         if state.seed != config.seed:
@@ -77,14 +77,14 @@ class Evolution:
         evolution = cls.start(config)
         evolution.state = state
         evolution.cache = dict(cache)
-        evolution.headings = dict(headings or {})
+        evolution.measures = dict(measures or {})
         evolution.evaluations = sum(stats.evaluations for stats in state.history)
         evolution.saved = sum(stats.saved for stats in state.history)
         evolution.elapsed = elapsed
         return evolution
 
     @property
-    def algorithm(self) -> GeneticAlgorithm:
+    def algorithm(self) -> Strategy:
         return self.engine.algorithm
 
     @property
@@ -101,7 +101,7 @@ class Evolution:
     def step(self, evaluator: Evaluator) -> GenerationStats:
         """Evaluate and tell one generation (the one generation step of
         `softevo.core.generation`)."""
-        step = self.engine.step(self.state, self.cache, evaluator, headings=self.headings)
+        step = self.engine.step(self.state, self.cache, evaluator, measures=self.measures)
         self.state = step.state
         self.evaluations += step.stats.evaluations
         self.saved += step.stats.saved

@@ -26,6 +26,8 @@ MAX_REPLAY_POSITIONS = 1_000_000
 #: Most cells of a quality-diversity archive (the product of its `bins`) and most descriptors.
 MAX_ARCHIVE_CELLS = 10_000
 MAX_DESCRIPTORS = 3
+#: Most settings in a strategy's own `options` (each validated by the strategy's model).
+MAX_OPTIONS = 64
 #: Shortest length of a terrain feature (m): a step's tread, a bar and the space between bars,
 #: a rough field's wavelength. A twentieth of the default voxel edge: finer, the features are
 #: far below what a robot's masses (one per voxel corner) can meet, and a drawn mesh or a

@@ -53,6 +53,8 @@ class GAState:
     best: tuple[Genome, float, int] | None = None  # genome, fitness, generation
     history: list[GenerationStats] = field(default_factory=list)
     archive: Archive | None = None  # quality-diversity runs: the archive after `previous`
+    #: A strategy's own state (plain JSON); None, and absent from the JSON, for those without.
+    data: dict[str, Any] | None = None
 
     def to_json(self, history: bool = True) -> dict[str, Any]:
         """JSON; without `history` (kept elsewhere, as the service keeps its curve) the size
@@ -62,8 +64,10 @@ class GAState:
             return None if items is None else [item.to_json() for item in items]
 
         archive = {} if self.archive is None else {"archive": self.archive.to_json()}
+        data = {} if self.data is None else {"data": self.data}
         return {
             **archive,
+            **data,
             "seed": self.seed,
             "generation": self.generation,
             "current": individuals(self.current),
@@ -104,6 +108,8 @@ class GAState:
             )
         if self.archive is not None:
             parts.append(f', "archive": {self.archive.to_text()}')
+        if self.data is not None:
+            parts.append(f', "data": {json.dumps(self.data)}')
         return "".join(parts) + "}"
 
     @classmethod
@@ -127,7 +133,15 @@ class GAState:
             ),
             history=[GenerationStats.from_json(item) for item in data.get("history", [])],
             archive=Archive.from_json(data["archive"]) if data.get("archive") else None,
+            data=_data(data.get("data")),
         )
+
+
+def _data(value: Any) -> dict[str, Any] | None:
+    """A strategy's own state as stored: an object, or None."""
+    if value is not None and not isinstance(value, dict):
+        raise ValueError(f"data: a strategy's state is an object, got {type(value).__name__}")
+    return value
 
 
 @cache

@@ -14,7 +14,8 @@ from softevo.core.config import resolve
 from softevo.core.encodings import VoxelPhaseEncoding, make_encoding
 from softevo.core.evaluation import PoolEvaluator, SerialEvaluator
 from softevo.core.evolution import Evolution
-from softevo.core.ga.algorithm import GAConfig, GeneticAlgorithm, Individual
+from softevo.core.ga.algorithm import GAConfig, Individual
+from softevo.core.ga.variation import mate
 from softevo.core.physics import simulate
 from softevo.core.robot import Actuation, VoxelRobot, build_mechanics
 from softevo.core.robot_file import RobotFileError, load_robot, parse_robot, robot_to_json
@@ -84,11 +85,12 @@ def test_crossover_carries_a_voxels_phase_and_amplitude_with_its_label() -> None
     n = 8
     first = encoding.genome(np.zeros(n, dtype=int), np.array([0.1, 0.2, *[0.3] * n, *[-1.0] * n]))
     second = encoding.genome(np.full(n, 3), np.array([-0.1, -0.2, *[-0.4] * n, *[2.0] * n]))
-    ga = GeneticAlgorithm(GAConfig(crossover_probability=1.0, mutation_probability=0.0), encoding)
+    config = GAConfig(crossover_probability=1.0, mutation_probability=0.0)
     rng = np.random.default_rng(1)
     swapped = 0
     for _ in range(50):
-        children = ga._mate(Individual(first, "x"), Individual(second, "x"), (0, 1), rng)
+        pair = (Individual(first, "x"), Individual(second, "x"))
+        children = mate(config, encoding, pair, (0, 1), rng)
         for child in children:
             amplitudes, phases = child.genome.real[2 : 2 + n], child.genome.real[2 + n :]
             for label, amplitude, phase in zip(child.genome.discrete, amplitudes, phases,

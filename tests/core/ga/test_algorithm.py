@@ -11,7 +11,7 @@ import pytest
 
 from softevo.core.config import resolve
 from softevo.core.encodings import make_encoding
-from softevo.core.ga.algorithm import GAConfig, GAState, GeneticAlgorithm
+from softevo.core.ga.algorithm import GAConfig, GAState, Strategy, make_strategy
 from softevo.core.ga.stats import GenerationStats
 
 
@@ -23,7 +23,7 @@ def toy_fitness(individuals: list) -> np.ndarray:
 class Held:
     """The pure algorithm with its state held here, as a driver holds it."""
 
-    def __init__(self, algorithm: GeneticAlgorithm, state: GAState) -> None:
+    def __init__(self, algorithm: Strategy, state: GAState) -> None:
         self.algorithm, self.state = algorithm, state
         self.config, self.encoding = algorithm.config, algorithm.encoding
 
@@ -41,7 +41,7 @@ class Held:
 
 def make(seed: int = 1, **changes: object) -> Held:
     config = GAConfig.model_validate({"population": 12, "generations": 15, **changes})
-    algorithm = GeneticAlgorithm(config, make_encoding("voxel", (3, 3, 2)))
+    algorithm = make_strategy(config, make_encoding("voxel", (3, 3, 2)))
     return Held(algorithm, algorithm.start(seed))
 
 
@@ -99,7 +99,7 @@ def test_generation_can_be_regenerated_from_seed_and_previous_population() -> No
         previous=state.previous,
         previous_fitness=state.previous_fitness,
     )
-    again = GeneticAlgorithm(algorithm.config, algorithm.encoding).ask(rebuilt)
+    again = make_strategy(algorithm.config, algorithm.encoding).ask(rebuilt)
     assert [i.genome for i in again] == [i.genome for i in upcoming]
     assert [i.operator for i in again] == [i.operator for i in upcoming]
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from softevo.core.config import resolve
-from softevo.core.ga.algorithm import GeneticAlgorithm
+from softevo.core.ga.algorithm import make_strategy
 from softevo.core.ga.state import GAState
 
 CASES = [
@@ -30,7 +30,7 @@ CASES = [
 @pytest.mark.parametrize("request_", CASES, ids=lambda case: "-".join(map(str, case.values())))
 def test_the_state_text_parses_to_its_json(request_: dict) -> None:
     config = resolve({**request_, "seed": 5})
-    algorithm = GeneticAlgorithm(config.ga_config(), config.make_encoding())
+    algorithm = make_strategy(config.ga_config(), config.make_encoding())
     state = algorithm.start(5)
     rng = np.random.default_rng(0)
     checked = 0
