@@ -240,6 +240,25 @@ class Preset(BaseModel):
     settings: dict[str, Any]
 
 
+class AlgorithmSetting(BaseModel):
+    """A shared run setting that a strategy reads."""
+
+    name: str
+    default: Any
+    description: str
+
+
+class AlgorithmPublic(BaseModel):
+    """An installed search strategy (`softevo algorithms` prints the same)."""
+
+    name: str = Field(description='the value of a run\'s "algorithm"')
+    summary: str
+    uses: list[AlgorithmSetting] = Field(description="the shared run settings it reads")
+    options: dict[str, Any] = Field(
+        description='JSON schema of its own settings, given as a run\'s "options"'
+    )
+
+
 class Health(BaseModel):
     """What is up. With SOFTEVO_API_TOKEN set, why a part is down (the exception) and the
     coordinator's identity and runs are shown only to a caller with the token."""

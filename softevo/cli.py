@@ -18,7 +18,14 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
-from softevo import __version__, plot_command, reproduce, run_command, service_commands
+from softevo import (
+    __version__,
+    algorithms_command,
+    plot_command,
+    reproduce,
+    run_command,
+    service_commands,
+)
 from softevo.core.export import FORMATS
 
 
@@ -183,6 +190,7 @@ def build_parser() -> argparse.ArgumentParser:
         dest="command", required=True, metavar="COMMAND", parser_class=Parser
     )
     run_command.add_parser(commands)
+    algorithms_command.add_parser(commands)
     reproduce.add_parser(commands)
     plot_command.add_parser(commands)
     service_commands.add_parsers(commands)

@@ -70,9 +70,15 @@ def add_parser(commands: Any) -> None:
         "task-* presets come with theirs",
     )  # fmt: skip
     run.add_argument(
-        "--algorithm", choices=["ga", "random", "hillclimb", "map-elites"],
-        help="ga (the preset's), random or hillclimb (baselines), map-elites (quality-diversity "
-        "over --descriptors: writes archive.csv, archive.json and the archive.png heat map)",
+        "--algorithm", metavar="NAME",
+        help="the search strategy: ga (the preset's), random or hillclimb (baselines), "
+        "map-elites (quality-diversity over --descriptors: writes archive.csv, archive.json "
+        "and the archive.png heat map), or any other installed one (softevo algorithms)",
+    )  # fmt: skip
+    run.add_argument(
+        "--options", type=options_json, metavar="JSON",
+        help="the strategy's own settings as a JSON object, e.g. '{\"keep\": 2}' "
+        "(softevo algorithms lists each strategy's)",
     )  # fmt: skip
     run.add_argument(
         "--descriptors", type=_names, metavar="A,B",
@@ -102,8 +108,8 @@ def add_parser(commands: Any) -> None:
 
 def _request(args: argparse.Namespace) -> dict[str, Any]:
     request: dict[str, Any] = {"preset": args.preset or "quick", "seed": args.seed or 0}
-    for name in ("shape", "encoding", "population", "generations", "algorithm", "descriptors",
-                 "bins"):  # fmt: skip
+    for name in ("shape", "encoding", "population", "generations", "algorithm", "options",
+                 "descriptors", "bins"):  # fmt: skip
         if getattr(args, name) is not None:
             request[name] = getattr(args, name)
     if args.objective is not None:
@@ -125,14 +131,23 @@ def _counts(text: str) -> list[int]:
         raise argparse.ArgumentTypeError(f"expected counts like 10,10, got {text!r}") from None
 
 
+def options_json(text: str) -> dict[str, Any]:
+    """`--options`: a JSON object (each strategy validates its own)."""
+    return _json_object(text, 'expected an object like {"keep": 2}')
+
+
 def terrain_json(text: str) -> dict[str, Any]:
     """`--terrain`: a JSON object (checked with the rest of the config)."""
+    return _json_object(text, 'expected an object like {"kind": "flat"}')
+
+
+def _json_object(text: str, expected: str) -> dict[str, Any]:
     try:
         value = json.loads(text)
     except json.JSONDecodeError as error:
         raise argparse.ArgumentTypeError(f"not JSON: {error.msg}") from None
     if not isinstance(value, dict):
-        raise argparse.ArgumentTypeError('expected an object like {"kind": "flat"}')
+        raise argparse.ArgumentTypeError(expected)
     return value
 
 
@@ -193,7 +208,7 @@ def _evolution(args: argparse.Namespace) -> tuple[Evolution, Path]:
 
 
 _CONFIG_FLAGS = ("preset", "shape", "encoding", "seed", "population", "duration", "objective",
-                 "terrain", "algorithm", "descriptors", "bins")  # fmt: skip
+                 "terrain", "algorithm", "options", "descriptors", "bins")  # fmt: skip
 
 
 def _figures(out: Path, evolution: Evolution) -> None:

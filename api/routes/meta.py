@@ -1,4 +1,4 @@
-"""`/healthz` and `/presets`."""
+"""`/healthz`, `/presets` and `/algorithms`."""
 
 from __future__ import annotations
 
@@ -6,9 +6,10 @@ from fastapi import APIRouter, Response
 
 from softevo.api.coordinator import Coordinator
 from softevo.api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TrustedDep
-from softevo.api.schemas import Health, Preset
+from softevo.api.schemas import AlgorithmPublic, Health, Preset
 from softevo.api.settings import Settings
 from softevo.core.config import PRESET_DESCRIPTIONS, PRESETS
+from softevo.core.ga.algorithm import describe_strategies
 
 router = APIRouter(tags=["meta"])
 
@@ -81,3 +82,10 @@ def presets() -> list[Preset]:
         Preset(name=name, description=PRESET_DESCRIPTIONS[name], settings=settings)
         for name, settings in PRESETS.items()
     ]
+
+
+@router.get("/algorithms")
+def algorithms() -> list[AlgorithmPublic]:
+    """The installed search strategies (entry-point group `softevo.strategies`): what a run's
+    `algorithm` may name, the shared settings each reads and the schema of its own `options`."""
+    return [AlgorithmPublic.model_validate(entry) for entry in describe_strategies()]

@@ -138,6 +138,24 @@ def make_strategy(config: GAConfig, encoding: Encoding) -> Strategy:
     return strategy_class(config.algorithm)(config, encoding)
 
 
-def algorithm_names() -> list[str]:
-    """The installed strategies' names."""
-    return list(strategies())
+def describe_strategies() -> list[dict[str, Any]]:
+    """Every installed strategy as `GET /algorithms` shows it: name, summary, the shared
+    settings it reads (with their defaults and descriptions) and its own options' schema."""
+    shared = GAConfig.model_fields
+    described = []
+    for strategy in strategies().values():
+        entry = strategy.describe()
+        entry["uses"] = [
+            {
+                "name": name,
+                "default": _plain(shared[name].get_default(call_default_factory=True)),
+                "description": shared[name].description or "",
+            }
+            for name in strategy.uses
+        ]
+        described.append(entry)
+    return described
+
+
+def _plain(value: Any) -> Any:
+    return list(value) if isinstance(value, tuple) else value

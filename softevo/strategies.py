@@ -1,0 +1,22 @@
+"""What a search strategy of your own package imports: the protocol, its state, and the
+built-in variation it may reuse. Register the class in your `pyproject.toml`:
+
+    [project.entry-points."softevo.strategies"]
+    my-search = "my_package.search:MySearch"
+
+and `softevo run --algorithm my-search`, `POST /runs`, `softevo.library.evolve` and the
+service's takeover of a run all find it (docs/evolution.md, "A strategy of your own").
+"""
+
+from __future__ import annotations
+
+from softevo.core.ga import operators
+from softevo.core.ga.registry import GROUP, StrategyError, strategies, strategy_class
+from softevo.core.ga.state import GAState, Individual
+from softevo.core.ga.strategy import NoOptions, Records, Strategy
+from softevo.core.ga.variation import mate, mutant
+
+__all__ = [
+    "GROUP", "GAState", "Individual", "NoOptions", "Records", "Strategy", "StrategyError",
+    "mate", "mutant", "operators", "strategies", "strategy_class",
+]  # fmt: skip
