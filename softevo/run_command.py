@@ -26,6 +26,7 @@ from softevo.results import (
     write_archive,
     write_results,
 )
+from softevo.resume_checks import ResumeError, check_folder
 
 DESCRIPTION = (
     "Evolve robots in this process with a live progress bar. While it runs (at least "
@@ -36,7 +37,9 @@ DESCRIPTION = (
     "of the generations done. The default folder is named by the config "
     "(softevo-runs/PRESET-SHAPE-seedN-HASH, HASH: 8 hex digits of the whole config), "
     "and a folder holding another config's results is refused. --resume DIR goes on "
-    "with a stopped run to the same results an uninterrupted one gives. From Python: "
+    "with a stopped run to the same results an uninterrupted one gives; its files are "
+    "checked against each other and the config first (a folder edited or mixed with another "
+    "run's files is refused in one line, nothing written). From Python: "
     "softevo.library.evolve (docs/python.md)."
 )
 
@@ -193,8 +196,14 @@ def _evolution(args: argparse.Namespace) -> tuple[Evolution, Path]:
             given.append("--out")
         if given:
             args.parser.error(f"--resume takes the run's own config; drop {', '.join(given)}")
+        folder = Path(args.resume)
         try:
-            evolution = read_resumable(Path(args.resume), args.generations)
+            if not folder.is_dir():
+                raise ValueError(f"{folder}: not a folder")
+            check_folder(folder, args.generations)  # a tampered folder: one line, before all
+            evolution = read_resumable(folder, args.generations)
+        except ResumeError as error:
+            args.parser.error(f"--resume {folder}/{error}")
         except ValueError as error:
             args.parser.error(f"--resume {error}")
         return evolution, _writable(args, Path(args.resume))
