@@ -26,11 +26,8 @@ from softevo import (
     run_command,
     service_commands,
 )
+from softevo.command_error import CommandError
 from softevo.core.export import FORMATS
-
-
-class CommandError(Exception):
-    """A failure to report as one line on stderr, with exit code 1."""
 
 
 def _positive_float(text: str) -> float:
@@ -122,7 +119,11 @@ def _add_export(commands: Any) -> None:
             "written in that format."
         ),
     )
-    export.add_argument("robot", metavar="ROBOT.json", help="robot file")
+    export.add_argument(
+        "robot",
+        metavar="ROBOT.json",
+        help="robot file, or a `softevo run` results folder (its best_robot.json)",
+    )
     export.add_argument(
         "--format", choices=FORMATS,
         help="file format (default: from the suffix of --out)",
@@ -163,7 +164,11 @@ def _add_replay(commands: Any) -> None:
             "more; .mp4 needs the ffmpeg program on PATH. Exits 1 if the file is invalid."
         ),
     )
-    replay.add_argument("robot", metavar="ROBOT.json", help="robot file")
+    replay.add_argument(
+        "robot",
+        metavar="ROBOT.json",
+        help="robot file, or a `softevo run` results folder (its best_robot.json)",
+    )
     replay.add_argument("--out", required=True, metavar="FILE.gif|FILE.mp4", help="file to write")
     replay.add_argument(
         "--fps", type=_positive_float, default=12.0,
@@ -208,7 +213,11 @@ def build_parser() -> argparse.ArgumentParser:
             "or the simulation blew up. From Python: softevo.library.simulate (docs/python.md)."
         ),
     )
-    simulate.add_argument("robot", metavar="ROBOT.json", help="robot file")
+    simulate.add_argument(
+        "robot",
+        metavar="ROBOT.json",
+        help="robot file, or a `softevo run` results folder (its best_robot.json)",
+    )
     simulate.add_argument(
         "--duration", type=_positive_float, metavar="S", help="simulated seconds (overrides sim)"
     )

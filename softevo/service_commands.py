@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from softevo.command_error import CommandError
+
 
 def add_parsers(commands: Any) -> None:
     _serve_parser(commands)
@@ -122,8 +124,6 @@ def _port_free(host: str, port: int) -> None:
     would only find out after start-up, in a screenful of log). Bound as uvicorn binds."""
     import socket
 
-    from softevo.cli import CommandError
-
     try:
         infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)
         family, kind, proto, _, address = infos[0]
@@ -140,7 +140,6 @@ def upgrade_command(args: argparse.Namespace) -> int:
     from sqlalchemy.exc import SQLAlchemyError
 
     from softevo.api.db import Database, current_revision, normalise_url
-    from softevo.cli import CommandError
 
     url = args.url or _settings(args).database_url
     try:
@@ -160,7 +159,6 @@ def worker_command(args: argparse.Namespace) -> int:
 
     from redis.exceptions import RedisError
 
-    from softevo.cli import CommandError
     from softevo.worker.process import run_worker
     from softevo.worker.queue import redacted
 
