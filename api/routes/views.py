@@ -2,7 +2,8 @@
 
 Both compute on request (a simulation, a matplotlib figure) in the API process, so each is
 bounded: a replay by the run's own simulated duration (under SOFTEVO_MAX_DURATION) and the frame
-rate cap, a figure by the run's size (under SOFTEVO_MAX_EVALUATIONS individuals).
+rate cap, a figure by the run's size (under SOFTEVO_MAX_EVALUATIONS individuals), of which it
+reads only the columns it draws (the population: generation and fitness, 16 bytes each).
 """
 
 from __future__ import annotations
@@ -62,14 +63,14 @@ def get_figure(
     from softevo.core import figures
 
     run = store.get_run(db, run_id)
-    items = store.list_individuals(db, run, None, 0, 10**9)[0] if kind == "population" else []
+    points = store.population_points(db, run_id) if kind == "population" else None
     rows = store.curve(db, run_id) if kind != "population" else []
     title = figures.run_title(run.config, f"run {run_id}")
     ylabel = figures.fitness_label(run.config)
     buffer = io.BytesIO()
     with _FIGURES:
-        if kind == "population":
-            figure = figures.population_figure(items, f"population: {title}", ylabel)
+        if points is not None:
+            figure = figures.population_figure(points, f"population: {title}", ylabel)
         elif kind == "curve":
             figure = figures.curve_figure(rows, f"learning curve: {title}", ylabel)
         else:

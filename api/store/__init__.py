@@ -25,6 +25,7 @@ from softevo.api.store.runs import (
     list_individuals,
     list_runs,
     list_sweeps,
+    population_points,
     progress_counts,
 )
 
@@ -32,5 +33,5 @@ __all__ = [
     "ConflictError", "NotFoundError", "QueueFullError", "RunRecord", "archive", "best_individual",
     "cancel_run", "create_run", "create_sweep", "curve", "curve_after", "driving",
     "get_individual", "get_run", "get_sweep", "leases", "list_individuals", "list_runs",
-    "list_sweeps", "progress_counts",
+    "list_sweeps", "population_points", "progress_counts",
 ]  # fmt: skip

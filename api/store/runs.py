@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 from typing import Any
 
+import numpy as np
 from sqlalchemy import func, select, update
 from sqlalchemy.orm import defer
 
@@ -210,19 +211,55 @@ def individual_json(row: Individual, population: int) -> dict[str, Any]:
     }
 
 
+#: Individuals as listings see them: never the genome (tens of kB of JSON each; a page of 5000
+#: with them cost 340 MB and 3 s, BENCHMARKS.md "Reads of a large run").
+_LISTED = select(Individual).options(defer(Individual.genome, raiseload=True))
+
+
 def list_individuals(
     db: Database, run: RunRecord, generation: int | None, offset: int, limit: int
 ) -> tuple[list[dict[str, Any]], int]:
     population = run.config["population"]
+    where = [Individual.run_id == run.id]
+    if generation is not None:
+        where.append(Individual.generation == generation)
     with db.read() as session:
-        query = select(Individual).where(Individual.run_id == run.id)
-        if generation is not None:
-            query = query.where(Individual.generation == generation)
-        total = session.scalar(select(func.count()).select_from(query.subquery())) or 0
+        total = session.scalar(select(func.count(Individual.id)).where(*where)) or 0
         rows = session.scalars(
-            query.order_by(Individual.generation, Individual.index).offset(offset).limit(limit)
+            _LISTED.where(*where)
+            .order_by(Individual.generation, Individual.index)
+            .offset(offset)
+            .limit(limit)
         )
         return [individual_json(row, population) for row in rows], total
+
+
+#: Rows read at a time by `population_points`.
+CHUNK = 10_000
+
+
+def population_points(db: Database, run_id: int) -> tuple[np.ndarray, np.ndarray]:
+    """Every individual's generation and fitness (NaN: failed or not yet evaluated), in order:
+    the dot plot's two columns as arrays (16 bytes an individual), read CHUNK rows at a time,
+    never the rows' other columns."""
+    with db.read() as session:
+        size = session.scalar(
+            select(func.count(Individual.id)).where(Individual.run_id == run_id)
+        ) or 0  # fmt: skip
+        generations, fitness = np.zeros(size, dtype=np.int64), np.full(size, np.nan)
+        result = session.execute(
+            select(Individual.generation, Individual.fitness)
+            .where(Individual.run_id == run_id)
+            .order_by(Individual.generation, Individual.index)
+            .execution_options(yield_per=CHUNK)
+        )
+        done = 0
+        for chunk in result.partitions():  # rows inserted since the count are left out
+            block = np.array(chunk[: size - done], dtype=float).reshape(-1, 2)  # None -> NaN
+            generations[done : done + len(block)] = block[:, 0]
+            fitness[done : done + len(block)] = block[:, 1]
+            done += len(block)
+        return generations[:done], fitness[:done]
 
 
 def get_individual(db: Database, run: RunRecord, number: int) -> dict[str, Any]:
