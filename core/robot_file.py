@@ -223,10 +223,22 @@ def parse_robot(data: Any) -> Robot:
     return robot
 
 
+#: The robot file a `softevo run` results folder holds: its best robot so far.
+RESULTS_ROBOT = "best_robot.json"
+
+
 def load_robot(path: str | Path) -> Robot:
-    """Read and validate a robot file; every failure is a RobotFileError with a one-line reason
-    (without the path, which the caller adds)."""
+    """Read and validate a robot file, or a `softevo run` results folder's best robot (its
+    `best_robot.json`); every failure is a RobotFileError with a one-line reason (without the
+    path, which the caller adds)."""
     path = Path(path)
+    if path.is_dir():
+        if not (path / RESULTS_ROBOT).is_file():
+            raise RobotFileError(
+                f"a folder without {RESULTS_ROBOT}: give a robot file, or a `softevo run` "
+                "results folder"
+            )
+        path = path / RESULTS_ROBOT
     try:
         size = path.stat().st_size
     except OSError as error:
@@ -235,6 +247,8 @@ def load_robot(path: str | Path) -> Robot:
         raise RobotFileError(f"{size} bytes, more than the limit of {MAX_FILE_BYTES}")
     try:
         data = json.loads(path.read_text(encoding="utf-8"), parse_constant=_refuse_constant)
+    except OSError as error:  # a special file, or one gone since stat
+        raise RobotFileError(f"cannot read ({error.strerror})") from None
     except (UnicodeDecodeError, json.JSONDecodeError) as error:
         raise RobotFileError(f"not valid JSON ({error})") from None
     except RecursionError:
