@@ -21,7 +21,7 @@ import numpy as np
 
 from softevo.core.encodings import Encoding
 from softevo.core.evaluator import BatchResult, Evaluator, evaluate_in_batches
-from softevo.core.ga.algorithm import GAState, GeneticAlgorithm, Individual
+from softevo.core.ga.algorithm import GAState, Individual, Strategy
 from softevo.core.ga.stats import GenerationStats
 from softevo.core.limits import BATCH_SIZE, IN_FLIGHT
 from softevo.core.robot_file import robot_to_json
@@ -72,7 +72,7 @@ class Engine:
     batches of at most `batch_size` robots, at most `in_flight` of them at once, each robot's
     fitness measured by `objective`."""
 
-    algorithm: GeneticAlgorithm
+    algorithm: Strategy
     sim: SimSettings
     batch_size: int = BATCH_SIZE
     in_flight: int = IN_FLIGHT
@@ -144,7 +144,7 @@ class Engine:
             state,
             individuals,
             values,
-            heading=directions,
+            measures=[{"heading": direction} for direction in directions.tolist()],
             evaluations=evaluations,
             saved=len(individuals) - evaluations,
         )
