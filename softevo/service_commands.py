@@ -108,6 +108,8 @@ def serve_command(args: argparse.Namespace) -> int:
     settings = _settings(args)
     if args.migrate:
         upgrade_command(argparse.Namespace(url=settings.database_url, parser=args.parser))
+    else:
+        _check_migrated(settings.database_url)
     logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
     uvicorn.run(
         create_app(settings),
@@ -117,6 +119,27 @@ def serve_command(args: argparse.Namespace) -> int:
         **uvicorn_options(settings),
     )
     return 0
+
+
+def _check_migrated(url: str) -> None:
+    """A PostgreSQL database that is not at the latest migration: one line before uvicorn
+    starts (its failed start-up would print the lifespan's whole traceback first). SQLite is
+    migrated on start; a database that cannot be reached is left to the start-up to report."""
+    from sqlalchemy.exc import SQLAlchemyError
+
+    from softevo.api.app import DatabaseNotMigratedError, check_migrated
+    from softevo.api.db import Database
+
+    db = Database(url)
+    try:
+        if not db.is_sqlite:
+            check_migrated(db)
+    except DatabaseNotMigratedError as error:
+        raise CommandError(str(error)) from None
+    except SQLAlchemyError:
+        pass
+    finally:
+        db.engine.dispose()
 
 
 def _port_free(host: str, port: int) -> None:
