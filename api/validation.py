@@ -49,14 +49,16 @@ def check_budget(configs: list[RunConfig], limits: Limits, loc: list[str | int])
     what = "this run" if len(configs) == 1 else f"these {len(configs)} runs"
     if cost.spring_steps > limits.max_spring_steps:
         raise RequestError(loc, f"{what} could simulate {cost.spring_steps:.3g} spring-steps "
-                           f"(springs of the box x steps x simulations), over the budget of "
+                           "(springs of the box x steps x simulations x the terrain's and "
+                           "objective's cost factor), over the budget of "
                            f"{limits.max_spring_steps:.3g}; ask for less (population, "
                            "generations, shape, sim.duration, sim.dt) or raise "
                            "SOFTEVO_MAX_SPRING_STEPS")  # fmt: skip
     if cost.stored_bytes > limits.max_stored_bytes:
         raise RequestError(loc, f"{what} would store about {cost.stored_bytes:.3g} bytes of "
-                           f"individuals, over the budget of {limits.max_stored_bytes:.3g}; ask "
-                           "for less (population, generations, shape) or raise "
+                           f"individuals and archive, over the budget of "
+                           f"{limits.max_stored_bytes:.3g}; ask for less (population, "
+                           "generations, shape, bins) or raise "
                            "SOFTEVO_MAX_STORED_BYTES")  # fmt: skip
 
 

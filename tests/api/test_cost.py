@@ -9,7 +9,7 @@ from collections.abc import Callable
 import pytest
 from fastapi.testclient import TestClient
 
-from softevo.api.cost import box_springs, run_cost
+from softevo.api.cost import OBJECTIVE_COST, TERRAIN_COST, box_springs, run_cost
 from softevo.api.settings import Limits
 from softevo.core.config import PAPER_NINE_SHAPES, resolve
 from softevo.core.lattice import full_lattice
@@ -72,3 +72,45 @@ def test_every_list_in_a_body_is_bounded(make_client: Callable[..., TestClient])
     many = {f"k{i}": 1.0 for i in range(33)}
     response = client.post("/runs", json={"preset": "quick", "sim": many})
     assert response.status_code == 422 and "sim" in str(response.json()["detail"])
+
+
+def _cost(**change: object) -> tuple[float, float]:
+    cost = run_cost(resolve({"preset": "quick", **change}))
+    return cost.spring_steps, cost.stored_bytes
+
+
+@pytest.mark.parametrize(
+    ("change", "factor"),
+    [
+        ({"objective": "efficiency"}, OBJECTIVE_COST["efficiency"]),
+        ({"sim": {"terrain": {"kind": "slope", "angle_deg": 10}}}, TERRAIN_COST["slope"]),
+        ({"sim": {"terrain": {"kind": "rough", "amplitude": 100}}}, TERRAIN_COST["rough"]),
+        ({"sim": {"terrain": {"kind": "steps"}}}, TERRAIN_COST["steps"]),
+        ({"sim": {"terrain": {"kind": "hurdles"}}, "objective": "efficiency"},
+         TERRAIN_COST["hurdles"] * OBJECTIVE_COST["efficiency"]),
+    ],
+)  # fmt: skip
+def test_what_costs_more_than_flat_ground_counts_more(change: dict, factor: float) -> None:
+    """Measured against flat ground: efficiency 1.46-1.70x, slope 1.26x, rough 1.28x (issue
+    39, bench/cost_factors.py); each factor covers what was measured."""
+    assert factor >= 1.2
+    assert _cost(**change)[0] == pytest.approx(_cost()[0] * factor)
+
+
+def test_a_map_elites_archive_is_counted_in_the_stored_bytes() -> None:
+    plain = run_cost(resolve({"preset": "paper-voxel"})).stored_bytes
+    archived = run_cost(resolve({"preset": "map-elites"})).stored_bytes  # the same, + 8 x 8 cells
+    assert archived - plain >= 64 * 300  # an elite is about 360 bytes
+    bigger = run_cost(resolve({"preset": "map-elites", "bins": [50, 50]})).stored_bytes
+    assert bigger - plain > archived - plain  # 2500 cells, as many elites as individuals
+
+
+def test_a_run_within_the_budget_on_flat_ground_is_refused_on_rough(
+    make_client: Callable[..., TestClient],
+) -> None:
+    flat = run_cost(resolve({"preset": "quick"})).spring_steps
+    client = make_client(limits=Limits(max_spring_steps=flat * 1.1))
+    assert client.post("/runs", json={"preset": "quick"}).status_code == 201
+    rough = {"preset": "quick", "sim": {"terrain": {"kind": "rough"}}}
+    response = client.post("/runs", json=rough)
+    assert response.status_code == 422 and "cost factor" in response.json()["detail"][0]["msg"]
