@@ -223,8 +223,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     simulate.add_argument(
         "--terrain", type=run_command.terrain_json, metavar="JSON",
-        help='simulate on this ground instead, e.g. \'{"kind": "steps", "height": 0.2, '
-        '"depth": 4.5}\' (docs/tasks.md)',
+        help=f"simulate on this ground instead: {run_command.TERRAIN_EXAMPLES}",
     )  # fmt: skip
     simulate.add_argument(
         "--trajectory", metavar="OUT.json", help="also write mass positions over time to this file"

@@ -69,8 +69,7 @@ def add_parser(commands: Any) -> None:
     )  # fmt: skip
     run.add_argument(
         "--terrain", type=terrain_json, metavar="JSON",
-        help='the ground, e.g. \'{"kind": "slope", "angle_deg": 10}\' (docs/tasks.md); the '
-        "task-* presets come with theirs",
+        help=f"the ground: {TERRAIN_EXAMPLES}; the task-* presets come with theirs",
     )  # fmt: skip
     run.add_argument(
         "--algorithm", metavar="NAME",
@@ -137,6 +136,15 @@ def _counts(text: str) -> list[int]:
 def options_json(text: str) -> dict[str, Any]:
     """`--options`: a JSON object (each strategy validates its own)."""
     return _json_object(text, 'expected an object like {"keep": 2}')
+
+
+#: `--terrain`'s help: one example of each kind with sloping or raised ground.
+TERRAIN_EXAMPLES = (
+    """'{"kind": "slope", "angle_deg": 10}', '{"kind": "steps", "height": 0.2, "depth": 1}', """
+    """'{"kind": "rough", "amplitude": 0.2, "wavelength": 3}', '{"kind": "hurdles", "height": """
+    """0.15, "spacing": 2, "width": 0.5}' (a parameter left out takes its default: '{"kind": """
+    """"rough"}' is a terrain; docs/tasks.md)"""
+)
 
 
 def terrain_json(text: str) -> dict[str, Any]:
