@@ -19,7 +19,9 @@ markdown table, per robot:
   is turned about z or mirrored (a symmetry of both simulators' floor and gravity) until its
   voxel 0 is actuated, for this measurement only, and softevo measures the same voxel;
 
-then the Spearman rank correlation of the champions' speeds between the two simulators.
+The examples include the crawler made a co-designed (`voxel-phase`) robot with random per-voxel
+phases and amplitudes (seed 40), since no evolved one is stored. Then the Spearman rank
+correlation of the champions' speeds between the two simulators.
 """
 
 from __future__ import annotations
@@ -40,7 +42,7 @@ from scipy.stats import spearmanr
 
 from softevo.core.export import ExportError, export_robot
 from softevo.core.physics import simulate
-from softevo.core.robot import VoxelRobot, build_mechanics
+from softevo.core.robot import Robot, VoxelRobot, build_mechanics
 from softevo.core.robot_file import load_robot
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -55,6 +57,7 @@ RECORD_SECONDS = 0.01
 class Swing:
     amplitude: float  # half peak to peak of the fitted sine, edge lengths
     period: float  # s
+    phase: float  # degrees: the fit is m + amplitude sin(2 pi t / period + phase)
 
 
 @dataclass
@@ -74,14 +77,15 @@ def fit_sine(times: np.ndarray, values: np.ndarray, omega: float) -> Swing:
     """The sine m + p sin(w t) + q cos(w t) closest to `values` (least squares), w searched
     from 0.5 to 1.5 times `omega` in steps of 1/4000 of it: its amplitude hypot(p, q) and period
     2 pi / w (to about 0.03 %)."""
-    best = (math.inf, 0.0, omega)
+    best = (math.inf, 0.0, omega, 0.0)
     for trial in np.linspace(0.5 * omega, 1.5 * omega, 4001):
         basis = np.column_stack([np.ones_like(times), np.sin(trial * times), np.cos(trial * times)])
         coef, residual, *_ = np.linalg.lstsq(basis, values, rcond=None)
         error = float(residual[0]) if len(residual) else math.inf
         if error < best[0]:
-            best = (error, float(math.hypot(coef[1], coef[2])), float(trial))
-    return Swing(best[1], 2 * math.pi / best[2])
+            phase = math.degrees(math.atan2(coef[2], coef[1]))
+            best = (error, float(math.hypot(coef[1], coef[2])), float(trial), phase)
+    return Swing(best[1], 2 * math.pi / best[2], best[3])
 
 
 def turned(robot: VoxelRobot, flip_x: bool, flip_y: bool, swap: bool) -> VoxelRobot:
@@ -185,9 +189,8 @@ def voxelyze_run(binary: str, robot: VoxelRobot, measure_voxel: bool) -> Voxelyz
     return VoxelyzeOut(True, float(np.hypot(*shift)), heading(shift), swing)
 
 
-def compare(binary: str, name: str, path: Path) -> Row | str:
+def compare(binary: str, name: str, robot: Robot) -> Row | str:
     """One robot in both simulators, or the line saying why it cannot be exported."""
-    robot = load_robot(path)
     try:
         export_robot(robot, "vxa")
     except ExportError as error:
@@ -205,14 +208,16 @@ def compare(binary: str, name: str, path: Path) -> Row | str:
 
 
 def _swing_text(swing: Swing | None) -> str:
-    return "-" if swing is None else f"{swing.amplitude:.4f} / {swing.period:.4f} s"
+    if swing is None:
+        return "-"
+    return f"{swing.amplitude:.4f} / {swing.period:.4f} s / {round(swing.phase) + 0:d}"
 
 
 def table(rows: list[Row]) -> str:
     lines = [
         "| robot | voxels | fitness file | displacement softevo (m) | displacement Voxelyze (m) "
-        "| heading softevo / Voxelyze (deg) | voxel swing / period softevo "
-        "| voxel swing / period Voxelyze |",
+        "| heading softevo / Voxelyze (deg) | voxel swing / period / phase (deg) softevo "
+        "| voxel swing / period / phase (deg) Voxelyze |",
         "| --- | ---: | :---: | ---: | ---: | ---: | ---: | ---: |",
     ]
     for row in rows:
@@ -225,13 +230,26 @@ def table(rows: list[Row]) -> str:
     return "\n".join(lines)
 
 
-def robots(boxes: str) -> list[tuple[str, Path]]:
-    chosen = [(name, ROOT / "examples" / f"{name}.json") for name in EXAMPLES]
-    experiments = ROOT / "docs" / "experiments"
+def co_designed(crawler: VoxelRobot) -> VoxelRobot:
+    """The crawler as a `voxel-phase` robot: every voxel its own phase in [-pi, pi] and amplitude
+    gene in [-pi/2, pi/2] (the encoding's ranges), drawn with seed 40. No such robot is stored."""
+    rng = np.random.default_rng(40)
+    n = len(crawler.voxels)
+    return VoxelRobot(
+        crawler.shape, crawler.voxels, crawler.actuation, crawler.sim,
+        phases=tuple(rng.uniform(-math.pi, math.pi, n).tolist()),
+        amplitudes=tuple(rng.uniform(-math.pi / 2, math.pi / 2, n).tolist()),
+    )  # fmt: skip
+
+
+def robots(boxes: str) -> list[tuple[str, Robot]]:
+    chosen = [(name, load_robot(ROOT / "examples" / f"{name}.json")) for name in EXAMPLES]
+    chosen.append(("crawler_4x4x4 voxel-phase (seed 40)", co_designed(chosen[1][1])))
+    folder = ROOT / "docs" / "experiments"
     if boxes in ("1", "both"):
-        chosen += [(f"best {box} (1 rad/s)", experiments / f"best_{box}.json") for box in BOXES]
+        chosen += [(f"best {b} (1 rad/s)", load_robot(folder / f"best_{b}.json")) for b in BOXES]
     if boxes in ("2pi", "both"):
-        chosen += [(f"best {box} (2 pi)", experiments / f"best_fast_{box}.json") for box in BOXES]
+        chosen += [(f"best {b} (2 pi)", load_robot(folder / f"best_fast_{b}.json")) for b in BOXES]
     return chosen
 
 
@@ -254,8 +272,8 @@ def main(argv: list[str] | None = None) -> int:
         print("vxa_voxelyze: set SOFTEVO_VOXELYZE to evosoro's voxelyze binary", file=sys.stderr)
         return 2
     rows, notes = [], []
-    for name, path in robots(args.boxes):
-        outcome = compare(binary, name, path)
+    for name, robot in robots(args.boxes):
+        outcome = compare(binary, name, robot)
         (notes if isinstance(outcome, str) else rows).append(outcome)
         print(outcome if isinstance(outcome, str) else f"{name}: done", file=sys.stderr)
     print(table(rows))
