@@ -113,10 +113,10 @@ def _add_export(commands: Any) -> None:
             "Write ROBOT.json (format softevo.robot/1) for other tools (docs/export.md): vxa is "
             "the XML of Voxelyze, VoxCAD and voxcraft-sim (materials with the Young's modulus "
             "of a solid of softevo voxels, Elastic_Mod = 7.58 x stiffness / edge_length, "
-            "actuation as thermal expansion with TempPeriod = 2 pi / "
-            "omega; voxel robots only); glb (glTF 2.0 binary, coloured by material, +Y up) and "
-            "stl are the voxel surface in metres. Exits 1 if the file is invalid or cannot be "
-            "written in that format."
+            "actuation per voxel with TempPeriod = 2 pi / omega; voxel robots only, co-designed "
+            "ones too; evosoro's Voxelyze runs it as it is and writes softevo_fitness.xml); glb "
+            "(glTF 2.0 binary, coloured by material, +Y up) and stl are the voxel surface in "
+            "metres. Exits 1 if the file is invalid or cannot be written in that format."
         ),
     )
     export.add_argument(
