@@ -22,8 +22,9 @@ FormatQuery = Annotated[
     Query(
         description=(
             "return the robot as a file instead of JSON: vxa (Voxelyze / VoxCAD / voxcraft-sim "
-            "XML, voxel robots only; evosoro's Voxelyze runs it as it is), glb (glTF 2.0 binary of the voxel surface, coloured by "
-            "material) or stl (the voxel surface); docs/export.md"
+            "XML, voxel robots only; evosoro's Voxelyze runs it as it is), glb (glTF 2.0 binary "
+            "of the voxel surface, coloured by material) or stl (the voxel surface); "
+            "docs/export.md"
         )
     ),
 ]
