@@ -28,6 +28,7 @@ from softevo.core.lattice import (
     spring_point_keys,
 )
 from softevo.core.settings import SimSettings
+from softevo.core.terrain import start_shift
 
 LABELS = ("empty", "soft", "hard", "sine", "neg_sine")
 ACTUATED_LABELS = ("sine", "neg_sine")
@@ -130,11 +131,16 @@ class Mechanics:
 
 
 def _initial_positions(lattice: Lattice, sim: SimSettings) -> np.ndarray:
-    """The lattice at rest, its lowest point `drop_height` above the terrain beneath it."""
+    """The lattice at rest, its lowest point `drop_height` above the terrain beneath it; on
+    steps or hurdles moved along x so that its front face stands `FIRST_FEATURE_GAP` before
+    the first riser or bar (`softevo.core.terrain.start_shift`)."""
     positions = lattice.rest_positions * sim.edge_length
     if sim.terrain.kind == "flat":  # the original arithmetic, to the last bit
         positions[:, 2] += sim.drop_height - positions[:, 2].min()
         return positions
+    shift = start_shift(sim.terrain, float(positions[:, 0].max()))
+    if shift != 0.0:  # 0 on the task presets for a 4x4x4 robot filling its front layer
+        positions[:, 0] += shift
     clearance = positions[:, 2] - sim.terrain.surface(positions[:, 0], positions[:, 1])
     positions[:, 2] += sim.drop_height - clearance.min()
     return positions

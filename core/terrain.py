@@ -221,6 +221,23 @@ AnyTerrain = Flat | Slope | Steps | Rough | Hurdles
 Terrain = Annotated[AnyTerrain, Field(discriminator="kind")]
 
 
+#: How far ahead of a robot's front face (the largest x of its masses at rest) the first riser
+#: of `steps` or bar of `hurdles` stands at the start (m), whatever the robot's size.
+FIRST_FEATURE_GAP = 0.15
+
+
+def start_shift(terrain: AnyTerrain, front: float) -> float:
+    """How far along x to move a robot whose front face is at x = `front` (m), so that the first
+    riser or bar stands FIRST_FEATURE_GAP ahead of it: features are placed relative to the
+    robot, so a 3x3x3 box meets them as a 4x4x4 one does (they stood at x = depth or spacing
+    whatever the box, and small boxes never reached them). 0 for the other kinds."""
+    if isinstance(terrain, Steps):
+        return terrain.depth - FIRST_FEATURE_GAP - front
+    if isinstance(terrain, Hurdles):
+        return terrain.spacing - FIRST_FEATURE_GAP - front
+    return 0.0
+
+
 def kernel_params(terrain: AnyTerrain) -> tuple[int, np.ndarray]:
     """The kernels' terrain arguments: kind code and a float64 parameter array."""
     return terrain.code, np.array(terrain.params(), dtype=np.float64)

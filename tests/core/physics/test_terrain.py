@@ -16,7 +16,7 @@ from numba import njit
 from softevo.core.physics import simulate, simulate_batch
 from softevo.core.robot import Actuation, VoxelRobot, build_mechanics
 from softevo.core.settings import SimSettings, sim_settings
-from softevo.core.terrain import Rough, sincos
+from softevo.core.terrain import FIRST_FEATURE_GAP, Rough, sincos
 from tests import reference_physics as reference
 
 TERRAINS = {
@@ -95,7 +95,8 @@ def test_a_hard_block_on_a_slope_above_the_friction_angle_slides_down() -> None:
 def test_a_block_dropped_onto_a_step_rests_at_the_steps_height() -> None:
     steps = {"kind": "steps", "height": 0.3, "depth": 2.0}
     mech = build_mechanics(hard_block(steps))
-    on_step = mech.positions + np.array([2.4, 0.0, 0.3 + 0.2])  # x in [2.4, 3.4]: step 1
+    rear = mech.positions[:, 0].min()
+    on_step = mech.positions + np.array([2.4 - rear, 0.0, 0.3 + 0.2])  # x in [2.4, 3.4]: step 1
     result, _ = simulate(dataclasses.replace(mech, positions=on_step))
     lowest = result.final_positions[:, 2].min()
     assert lowest == pytest.approx(0.3, abs=2e-3)  # the penalty spring sinks it ~1e-4 m
@@ -107,8 +108,10 @@ def test_a_block_caught_in_a_riser_is_pushed_back_by_its_face() -> None:
     so it is pushed back along -x (a wrong normal would lift it onto the step)."""
     steps = {"kind": "steps", "height": 0.8, "depth": 2.0}
     mech = build_mechanics(hard_block(steps))
-    assert mech.positions[:, 0].max() == pytest.approx(1.0)  # on the ground of step 0
-    caught = dataclasses.replace(mech, positions=mech.positions + np.array([1.02, 0.0, 0.0]))
+    front = mech.positions[:, 0].max()
+    assert front == pytest.approx(2.0 - FIRST_FEATURE_GAP)  # on the ground of step 0
+    inside = np.array([2.02 - front, 0.0, 0.0])
+    caught = dataclasses.replace(mech, positions=mech.positions + inside)
     result, _ = simulate(caught)
     assert result.stable
     assert result.final_positions[:, 0].max() < 2.0 + 1e-3
