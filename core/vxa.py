@@ -47,6 +47,8 @@ MATERIAL_IDS = {"soft": 1, "hard": 2, "sine": 3, "neg_sine": 4}
 FITNESS_FILE = "softevo_fitness.xml"
 #: CM trace points in the fitness file per actuation period (or per duration without actuation).
 TRACES_PER_PERIOD = 50
+#: Most empty layers written under a robot for its drop height (each is X*Y numbers per layer).
+MAX_DROP_LAYERS = 1000
 #: Voxelyze's bond damping ratio (1 = critical): the published examples' value; softevo has no
 #: damping of its own inside the body, but the engine needs this to stay stable (docs/export.md).
 BOND_DAMPING_Z = 1.0
@@ -290,6 +292,11 @@ def to_vxa(robot: Robot, grid: np.ndarray) -> bytes:
     moduli = np.array([table[label]["Elastic_Mod"] for label in grid[filled]])
     voxel_mass = table["soft"]["Density"] * sim.edge_length**3
     below = drop_layers(robot)
+    if below > MAX_DROP_LAYERS:
+        raise ExportError(
+            f"vxa: sim.drop_height {_number(sim.drop_height)} m is {below} edge lengths, written "
+            f"as that many empty layers under the robot: more than {MAX_DROP_LAYERS}"
+        )
     xml = _Xml()
     xml.open("VXA", Version="1.1")
     xml.comment(

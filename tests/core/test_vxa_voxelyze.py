@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from softevo.core.export import export_robot
+from softevo.core.export import ExportError, export_robot
 from softevo.core.robot import Actuation, VoxelRobot
 from softevo.core.robot_file import load_robot
 from softevo.core.settings import sim_settings
@@ -157,6 +157,9 @@ def test_the_drop_height_is_empty_layers_under_the_robot(examples: Path) -> None
     robot = co_designed(drop_height=0.4)  # not a whole number of layers: the nearest, said so
     text = export_robot(robot, "vxa").decode()
     assert "Voxelyze starts it on 0 empty layer(s)" in text
+    tall = co_designed(drop_height=100.0, edge_length=0.01)  # 10000 layers: refused, one line
+    with pytest.raises(ExportError, match=r"sim\.drop_height 100\.0 m is 10000 edge lengths"):
+        export_robot(tall, "vxa")
 
 
 def test_slow_damping_matches_softevos_velocity_factor() -> None:
