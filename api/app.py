@@ -124,9 +124,7 @@ def create_app(
         docs_url=None,  # served from the package by `dashboard.install` (offline)
         redoc_url=None,  # ReDoc loads its script from a CDN
     )
-    app.add_middleware(BodyLimitMiddleware, max_bytes=settings.limits.max_body_bytes)
-    if settings.protect_reads and settings.api_token:  # outermost: a refused read costs nothing
-        app.add_middleware(ReadTokenMiddleware, token=settings.api_token)
+    _install_middleware(app, settings)
     app.include_router(runs.router)
     app.include_router(archive.router)
     app.include_router(views.router)
@@ -135,6 +133,14 @@ def create_app(
     dashboard.install(app)
     _install_error_handlers(app)
     return app
+
+
+def _install_middleware(app: FastAPI, settings: Settings) -> None:
+    """The body limit, and with SOFTEVO_PROTECT_READS the read token around it (the outermost:
+    a refused read costs nothing)."""
+    app.add_middleware(BodyLimitMiddleware, max_bytes=settings.limits.max_body_bytes)
+    if settings.protect_reads and settings.api_token:
+        app.add_middleware(ReadTokenMiddleware, token=settings.api_token)
 
 
 def _install_error_handlers(app: FastAPI) -> None:
