@@ -39,3 +39,28 @@ def objective_label(objective: str) -> str:
     names = {"speed": "speed", "forward": "forward speed", "climb": "climb rate",
              "efficiency": "efficiency"}  # fmt: skip
     return f"{names[objective]} ({OBJECTIVES[objective][1]})"
+
+
+#: Every measure of a simulation's record (`SimResult.measures`) a run may name in `objectives`:
+#: name -> (unit, goal it is usually given, hypervolume reference in the measure's own units).
+#: The reference is a value worse than almost any robot's: 0 for what is maximised (a robot that
+#: does not move spans no volume); for cost_of_transport and energy, well above what a random
+#: 4x4x4 paper-voxel robot measures (48 of them, seed 0: cost of transport median about 1,300,
+#: largest about 27,000; energy largest about 44,000 J). A run may give its own (`reference`).
+MEASURES: dict[str, tuple[str, str, float | None]] = {
+    "speed": ("m/s", "max", 0.0),
+    "forward_speed": ("m/s", "max", 0.0),
+    "climb_rate": ("m/s", "max", 0.0),
+    "distance": ("m", "max", 0.0),
+    "efficiency": ("m/J", "max", 0.0),
+    "cost_of_transport": ("1", "min", 100_000.0),
+    "energy": ("J", "min", 1_000_000.0),
+    "heading": ("degrees", "max", None),
+    "stable": ("1", "max", None),
+    "total_mass": ("kg", "min", None),
+    "masses": ("1", "min", None),
+    "springs": ("1", "min", None),
+}
+
+#: Measures the simulation only takes when asked to count the actuators' work.
+ENERGY_MEASURES = frozenset({"energy", "cost_of_transport", "efficiency"})

@@ -29,6 +29,7 @@ from softevo.core.ga.descriptors import CATALOGUE
 from softevo.core.ga.registry import StrategyError, strategies, strategy_class
 from softevo.core.ga.state import GAState, Individual, generation_rng
 from softevo.core.ga.strategy import Strategy
+from softevo.core.ga.vectors import ObjectiveSpec, parse_objectives
 from softevo.core.limits import MAX_ARCHIVE_CELLS, MAX_DESCRIPTORS, MAX_OPTIONS
 
 __all__ = ["GAConfig", "GAState", "Individual", "Strategy", "generation_rng", "make_strategy"]
@@ -52,6 +53,15 @@ class GAConfig(BaseModel):
         description="the strategy's own settings, validated by it (GET /algorithms shows "
         "each strategy's fields); none for the built-ins",
     )
+    objectives: tuple[ObjectiveSpec, ...] = Field(
+        (),
+        description="several objectives at once, by measure name (softevo.core.objectives."
+        'MEASURES): ["speed", "-cost_of_transport"], a leading "-" minimising, or objects '
+        '{"measure": ..., "goal": "min", "reference": ...}; stored as objects with the '
+        "hypervolume reference point filled in. nsga2 and afpo select on them; any other "
+        "algorithm keeps the front beside it (curve columns hypervolume, front_size). The "
+        "fitness stays `objective`'s",
+    )
     descriptors: tuple[str, ...] = Field(
         (),
         description="quality-diversity descriptors (softevo.core.ga.descriptors: voxels, "
@@ -72,6 +82,11 @@ class GAConfig(BaseModel):
     mutation_sigma: float = Field(0.1, ge=0, le=10, description="real-gene step / range")
     immigrants: float = Field(0.12, ge=0, le=1, description="fraction of P, each generation")
     elitism: bool = True
+
+    @field_validator("objectives", mode="before")
+    @classmethod
+    def _objectives(cls, value: Any) -> Any:
+        return parse_objectives(value)
 
     @field_validator("descriptors", "bins", mode="before")
     @classmethod
@@ -121,11 +136,12 @@ class GAConfig(BaseModel):
 
     @model_serializer(mode="wrap")
     def _without_empty_options(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
-        """A config without options dumps as it did before strategies had any, so the hashes
-        of every existing config (output folders, stored runs) stay the same."""
+        """A config without options or objectives dumps as it did before strategies had any,
+        so the hashes of every existing config (output folders, stored runs) stay the same."""
         dumped = handler(self)
-        if not dumped.get("options"):
-            dumped.pop("options", None)
+        for name in ("options", "objectives"):
+            if not dumped.get(name):
+                dumped.pop(name, None)
         return dumped
 
     @property

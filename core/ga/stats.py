@@ -27,6 +27,14 @@ CURVE_COLUMNS = (
 #: The columns a run with an archive adds (quality-diversity, `softevo.core.ga.archive`).
 QD_COLUMNS = ("coverage", "qd_score")
 
+#: The columns a run with `objectives` adds: the hypervolume of the non-dominated set of every
+#: individual evaluated so far (against the run's reference point) and how many distinct points
+#: that set holds (`softevo.core.ga.vectors`, docs/evolution.md).
+PARETO_COLUMNS = ("hypervolume", "front_size")
+
+#: Columns only some runs have: absent (not null) from a row that does not fill them.
+_OPTIONAL = frozenset(QD_COLUMNS + PARETO_COLUMNS)
+
 
 @dataclass(frozen=True)
 class GenerationStats:
@@ -44,14 +52,17 @@ class GenerationStats:
     saved: int = 0  # individuals whose fitness came from the cache
     coverage: float | None = None  # runs with descriptors: filled fraction of the archive
     qd_score: float | None = None  # and the sum of its elites' fitness
+    hypervolume: float | None = None  # runs with objectives: of the front so far
+    front_size: int | None = None  # and its distinct points
 
     def to_json(self) -> dict[str, Any]:
-        """JSON; a run without an archive has no coverage or qd_score keys."""
+        """JSON; a run without an archive has no coverage or qd_score keys, one without
+        objectives no hypervolume or front_size."""
         values = ((name, getattr(self, name)) for name in _FIELDS)  # all plain numbers
         return {
             k: (to_null(v) if isinstance(v, float) else v)
             for k, v in values
-            if v is not None or k not in QD_COLUMNS
+            if v is not None or k not in _OPTIONAL
         }
 
     @classmethod

@@ -27,10 +27,12 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict
 
 from softevo.core.encodings import Encoding
+from softevo.core.ga import pareto
 from softevo.core.ga.archive import Archive
 from softevo.core.ga.descriptors import describe
 from softevo.core.ga.state import GAState, Individual, generation_rng
 from softevo.core.ga.stats import GenerationStats, generation_stats
+from softevo.core.ga.vectors import objective_values, reference_point
 
 if TYPE_CHECKING:
     from softevo.core.ga.algorithm import GAConfig
@@ -124,6 +126,12 @@ class Strategy(ABC):
         )
         if archive is not None:
             stats = replace(stats, coverage=archive.coverage, qd_score=archive.qd_score)
+        data = state.data
+        if config_objectives := self.config.objectives:
+            front = _front(state.data, objective_values(config_objectives, records, values))
+            data = {**(state.data or {}), FRONT_KEY: front.tolist()}
+            volume = pareto.hypervolume(front, reference_point(config_objectives))
+            stats = replace(stats, hypervolume=volume, front_size=len(front))
         following = GAState(
             seed=state.seed,
             generation=state.generation + 1,
@@ -133,7 +141,7 @@ class Strategy(ABC):
             best=best,
             history=[*state.history, stats],
             archive=archive,
-            data=state.data,
+            data=data,
         )
         return following, stats
 
@@ -164,6 +172,20 @@ class Strategy(ABC):
             "uses": list(cls.uses),
             "options": cls.Options.model_json_schema(),
         }
+
+
+#: The key of `GAState.data` under which a run with objectives keeps its front so far: the
+#: distinct maximised points no evaluated individual dominates (strategies keep other keys).
+FRONT_KEY = "front"
+
+
+def _front(data: dict[str, Any] | None, values: np.ndarray) -> np.ndarray:
+    """The distinct non-dominated points of the front so far (in `data`) and `values` (failed
+    rows left out), sorted (np.unique's order): the same whatever order they were told in."""
+    known = np.asarray((data or {}).get(FRONT_KEY, []), dtype=np.float64)
+    finite = values[~np.isnan(values).any(axis=1)]
+    points = np.unique(np.concatenate([known.reshape(-1, values.shape[1]), finite]), axis=0)
+    return points[pareto.nondominated_mask(points)]
 
 
 def _best(
