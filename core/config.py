@@ -166,7 +166,9 @@ PRESET_DESCRIPTIONS = {
     "paper-voxel": "paper phase 3: voxel robots in a bounding box (4x4x4 by default)",
     "voxel-plus": "paper-voxel with half the children mutated: it keeps improving where "
     "paper-voxel stalls (docs/evolution.md)",
-    "quick": "a small voxel run for demos and tests (3x3x3, 16 x 20 generations, 3 s)",
+    "quick": "a small voxel run for demos and tests (3x3x3, 16 x 20 generations, 3 s); it "
+    "scores 2.5 s of motion at 1 rad/s, under half an actuation period, so its speeds are one "
+    "lean, not a gait's (its seed-1 best: 0.223 m/s over 3 s, 0.070 m/s over 5 s)",
     "map-elites": "paper-voxel as MAP-Elites: the best robot of every cell of filled x actuated "
     "fraction (8 x 8), parents drawn from the archive (docs/evolution.md)",
     **{name: f"paper-voxel task: {asks}" for name, (asks, _, _) in TASKS.items()},

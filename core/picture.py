@@ -62,6 +62,15 @@ def check(fps: float, seconds: float) -> int:
     return max(1, round(fps * seconds))
 
 
+def one_period(robot: Robot) -> float:
+    """Simulated seconds that show a whole stroke: one actuation period (2 pi / omega), at least
+    SECONDS and at most MAX_PICTURE_SECONDS (3 s at 1 rad/s is under half a period: a robot
+    that leans forward in it and back after looks like a crawler)."""
+    omega = build_mechanics(robot).omega
+    period = 2 * math.pi / omega if omega > 0 else SECONDS
+    return min(MAX_PICTURE_SECONDS, max(SECONDS, period))
+
+
 def ffmpeg_available() -> bool:
     return shutil.which("ffmpeg") is not None
 

@@ -144,8 +144,9 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     except RobotFileError as error:
         raise CommandError(f"{args.robot}: {error}") from None
     try:
-        picture.check(args.fps, args.duration)
-        data = picture.movie(robot, format, args.fps, args.duration)
+        seconds = args.duration if args.duration is not None else picture.one_period(robot)
+        picture.check(args.fps, seconds)
+        data = picture.movie(robot, format, args.fps, seconds)
     except picture.PictureError as error:
         raise CommandError(f"{args.robot}: {error}") from None
     return _write_file(args.out, data, format)
@@ -175,8 +176,9 @@ def _add_replay(commands: Any) -> None:
         help=f"frames per simulated second (12; {MIN_PICTURE_FPS:g} to {MAX_PICTURE_FPS:g})",
     )  # fmt: skip
     replay.add_argument(
-        "--duration", type=_positive_float, default=3.0, metavar="S",
-        help=f"simulated seconds drawn (3; at most {MAX_PICTURE_SECONDS:g})",
+        "--duration", type=_positive_float, metavar="S",
+        help="simulated seconds drawn (default: one actuation period, 2 pi / omega: 6.28 s at "
+        f"the paper's 1 rad/s; at least 3, at most {MAX_PICTURE_SECONDS:g})",
     )  # fmt: skip
     replay.set_defaults(handler=_cmd_replay)
 

@@ -1,0 +1,39 @@
+"""What a newcomer meets first (issue 39): `quick` says that it scores under half an actuation
+period, and `softevo replay` draws one whole period unless told otherwise."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+from PIL import Image
+
+from softevo.core import picture
+from softevo.core.config import PRESET_DESCRIPTIONS, resolve
+from softevo.core.robot_file import load_robot
+from tests.softevo.inprocess import softevo
+
+
+def test_quick_says_it_scores_under_half_a_period() -> None:
+    sim = resolve({"preset": "quick"}).sim
+    assert sim.measured_time < math.pi / sim.omega  # what the description says
+    assert "under half an actuation period" in PRESET_DESCRIPTIONS["quick"]
+
+
+def test_a_replay_draws_one_actuation_period_by_default(examples: Path, tmp_path: Path) -> None:
+    crawler = examples / "crawler_4x4x4.json"
+    assert picture.one_period(load_robot(crawler)) == 2 * math.pi  # 1 rad/s: 6.28 s, not 3
+    out = tmp_path / "period.gif"
+    done = softevo("replay", str(crawler), "--out", str(out), "--fps", "1")
+    assert done.returncode == 0, done.stderr
+    with Image.open(out) as image:
+        assert image.n_frames == round(2 * math.pi)
+
+
+def test_a_quick_robot_replays_at_least_three_seconds(examples: Path, tmp_path: Path) -> None:
+    fast = json.loads((examples / "crawler_4x4x4.json").read_text())
+    fast["sim"] = {**fast["sim"], "omega": 10.0}  # a period of 0.63 s
+    path = tmp_path / "fast.json"
+    path.write_text(json.dumps(fast))
+    assert picture.one_period(load_robot(path)) == picture.SECONDS
