@@ -45,7 +45,8 @@ class GAConfig(BaseModel):
         max_length=100,
         description="the search strategy, by name: one installed in the entry-point group "
         "`softevo.strategies` (built in: ga, the paper's genetic algorithm; random, random "
-        "search; hillclimb, a (1+lambda) hill climber; map-elites, quality-diversity). "
+        "search; hillclimb, a (1+lambda) hill climber; map-elites, quality-diversity; "
+        "nsga2, NSGA-II; afpo, age-fitness Pareto optimisation). "
         "GET /algorithms lists those installed, with the settings each one reads.",
     )
     options: dict[str, Any] = Field(

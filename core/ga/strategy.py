@@ -50,7 +50,8 @@ class NoOptions(BaseModel):
 class Strategy(ABC):
     """One search algorithm. Subclasses set `name`, `summary`, `uses` and `Options`, and
     implement `breed`; the shared `tell` keeps the best so far, the archive and the curve row,
-    and a strategy that needs more overrides it (and may keep JSON in `GAState.data`)."""
+    and a strategy that needs more overrides it (and may keep JSON in `GAState.data`; the key
+    `front` there is the shared `tell`'s, for a run with `objectives`)."""
 
     name: ClassVar[str]
     summary: ClassVar[str]
