@@ -175,6 +175,19 @@ PRESET_DESCRIPTIONS = {
 }
 
 
+def _default_map(merged: dict[str, Any], request: dict[str, Any]) -> None:
+    """`map-elites` asked for without descriptors takes the `map-elites` preset's map (filled x
+    actuated fraction); descriptors without bins take its 8 cells each. (An empty list given is
+    refused as it was: only what was left out is filled in.)"""
+    qd = PRESETS["map-elites"]
+    if merged.get("algorithm") == "map-elites" and "descriptors" not in request:
+        merged["descriptors"] = merged.get("descriptors") or qd["descriptors"]
+    descriptors = merged.get("descriptors")
+    given = isinstance(descriptors, list | tuple) and descriptors and "bins" not in request
+    if given and len(merged.get("bins") or ()) != len(descriptors):
+        merged["bins"] = [qd["bins"][0]] * len(descriptors)
+
+
 def resolve(request: dict[str, Any]) -> RunConfig:
     """Merge a preset with overrides and validate; ConfigError names the offending field."""
     if not isinstance(request, dict):
@@ -190,6 +203,7 @@ def resolve(request: dict[str, Any]) -> RunConfig:
             f'{{"sim": {{"{name}": ...}}}} (sim.{name})'
         )
     merged = {**PRESETS[preset], **request, "preset": preset}
+    _default_map(merged, request)
     sim_overrides = request.get("sim", {})
     if not isinstance(sim_overrides, dict):
         raise ConfigError("sim: expected an object of simulation settings")

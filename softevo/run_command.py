@@ -74,8 +74,9 @@ def add_parser(commands: Any) -> None:
     run.add_argument(
         "--algorithm", metavar="NAME",
         help="the search strategy: ga (the preset's), random or hillclimb (baselines), "
-        "map-elites (quality-diversity over --descriptors: writes archive.csv, archive.json "
-        "and the archive.png heat map), or any other installed one (softevo algorithms)",
+        "map-elites (quality-diversity over --descriptors, by default the map-elites "
+        "preset's voxels,actuated x 8,8: writes archive.csv, archive.json and the archive.png "
+        "heat map), or any other installed one (softevo algorithms)",
     )  # fmt: skip
     run.add_argument(
         "--options", type=options_json, metavar="JSON",
@@ -89,7 +90,10 @@ def add_parser(commands: Any) -> None:
         + " (heading is measured by the simulation, the others read from the body)",
     )  # fmt: skip
     run.add_argument(
-        "--bins", type=_counts, metavar="N,M", help="cells along each descriptor, e.g. 10,10"
+        "--bins",
+        type=_counts,
+        metavar="N,M",
+        help="cells along each descriptor, e.g. 10,10 (default: 8 each)",
     )
     run.add_argument(
         "--workers", type=int, metavar="W", help="processes (default: one per core; 1 = serial)"

@@ -37,3 +37,18 @@ def test_a_quick_robot_replays_at_least_three_seconds(examples: Path, tmp_path: 
     path = tmp_path / "fast.json"
     path.write_text(json.dumps(fast))
     assert picture.one_period(load_robot(path)) == picture.SECONDS
+
+
+def test_map_elites_without_a_map_takes_the_presets(tmp_path: Path) -> None:
+    config = resolve({"preset": "quick", "algorithm": "map-elites"})
+    assert (config.descriptors, config.bins) == (("voxels", "actuated"), (8, 8))
+    one = resolve({"preset": "quick", "algorithm": "map-elites", "descriptors": ["soft"]})
+    assert one.bins == (8,)
+    out = tmp_path / "qd"
+    done = softevo(
+        "run", "--preset", "quick", "--algorithm", "map-elites", "--population", "4",
+        "--generations", "1", "--shape", "2x2x2", "--duration", "1", "--out", str(out),
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    archive = json.loads((out / "archive.json").read_text())
+    assert archive["descriptors"] == ["voxels", "actuated"] and archive["bins"] == [8, 8]

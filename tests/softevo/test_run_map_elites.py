@@ -45,5 +45,7 @@ def test_bad_bins_are_a_usage_error_naming_them(tmp_path: Path) -> None:
         "--out", str(tmp_path),
     )  # fmt: skip
     assert done.returncode == 2 and "--bins" in done.stderr and "ten" in done.stderr
-    done = softevo("run", "--algorithm", "map-elites", "--out", str(tmp_path))
-    assert done.returncode == 2 and "needs at least one descriptor" in done.stderr
+    done = softevo("run", "--algorithm", "map-elites", "--bins", "4,4,4", "--out", str(tmp_path))
+    assert (
+        done.returncode == 2 and "bins: one count per descriptor" in done.stderr
+    )  # the preset's 2
