@@ -6,7 +6,9 @@
      "actuation": {"a": .., "b": .., "c": ..},   # genes of sine / neg_sine voxels: required
                                              # with any (0, 0, 0 would be a still robot)
      "sim": {"dt": .., ...},                 # overrides of the default SimSettings
-     "objective": "speed"}                   # optional: the measure that is its fitness
+     "objective": "speed",                   # optional: the measure that is its fitness
+     "energy": true}                         # optional: measure the actuators' work (energy,
+                                             # cost_of_transport) whatever the objective
 
 A co-designed robot (the `voxel-phase` encoding) adds "phases" (rad, added to c) and, optionally,
 "amplitudes" (in place of b): one number per voxel, null on every voxel that is not actuated.
@@ -31,7 +33,14 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    StrictBool,
+    ValidationError,
+    field_validator,
+)
 
 from softevo.core.limits import MAX_FILE_BYTES, MAX_SIDE, MAX_VOXELS
 from softevo.core.objectives import Objective
@@ -92,6 +101,7 @@ class _RobotModel(BaseModel):
     actuation: _ActuationModel | None = None
     sim: dict[str, Any] = Field(default_factory=dict)
     objective: Objective | None = None  # what the robot's fitness is (absent: speed)
+    energy: StrictBool | None = None  # measure the actuators' work (absent: if the objective needs)
     phases: list[Number | None] | None = Field(None, max_length=MAX_VOXELS)
     amplitudes: list[Number | None] | None = Field(None, max_length=MAX_VOXELS)
 
@@ -160,6 +170,11 @@ def _actuated_needs_genes(model: _RobotModel) -> None:
 def file_objective(data: dict[str, Any]) -> str:
     """The objective a (parsed, so valid) robot file's fitness is measured by."""
     return data.get("objective") or "speed"
+
+
+def file_energy(data: dict[str, Any]) -> bool:
+    """Whether a (parsed, so valid) robot file asks for the actuators' work to be measured."""
+    return data.get("energy") is True
 
 
 def parse_robot(data: Any) -> Robot:
@@ -307,6 +322,7 @@ __all__ = [
     "FORMAT",
     "RobotFileError",
     "dump_robot",
+    "file_energy",
     "file_objective",
     "load_robot",
     "parse_robot",

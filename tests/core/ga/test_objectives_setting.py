@@ -3,10 +3,16 @@ the run, and one line naming the field for anything wrong."""
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import pytest
 
 from softevo.core.config import ConfigError, resolve
 from softevo.core.ga.vectors import needs_energy, reference_point
+from softevo.core.robot_file import RobotFileError, file_energy, parse_robot
+
+EXAMPLES = Path(__file__).parents[3] / "docs" / "experiments"
 
 
 def test_names_and_objects_are_one_setting_stored_with_their_reference() -> None:
@@ -47,3 +53,12 @@ def test_bad_objectives_are_named_in_one_line(objectives: object, message: str) 
     with pytest.raises(ConfigError) as caught:
         resolve({"objectives": objectives})
     assert str(caught.value).startswith(message) and "\n" not in str(caught.value)
+
+
+def test_a_robot_file_may_ask_for_the_actuators_work() -> None:
+    document = json.loads((EXAMPLES / "best_4x4x4.json").read_text())
+    assert not file_energy(document)
+    parse_robot({**document, "energy": True})
+    assert file_energy({**document, "energy": True})
+    with pytest.raises(RobotFileError, match=r"^energy: Input should be a valid boolean$"):
+        parse_robot({**document, "energy": "yes"})
