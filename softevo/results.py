@@ -67,7 +67,7 @@ def write_results(out: Path, evolution: Evolution) -> None:
         _write_json(out / "best_robot.json", result.best)
     temporary = out / "curve.csv.tmp"
     with temporary.open("w", newline="", encoding="utf-8") as handle:
-        writer = csv.writer(handle)
+        writer = csv.writer(handle, lineterminator="\n")
         columns = CURVE_COLUMNS + (QD_COLUMNS if evolution.config.descriptors else ())
         writer.writerow(columns)
         for row in result.curve:
@@ -124,7 +124,7 @@ def append_population(out: Path, evolution: Evolution) -> None:
     generation = state.generation - 1
     path = out / "population.csv"
     with path.open("w" if generation == 0 else "a", newline="", encoding="utf-8") as handle:
-        writer = csv.writer(handle)
+        writer = csv.writer(handle, lineterminator="\n")
         if generation == 0:
             writer.writerow(POPULATION_COLUMNS)
         for index, (item, value) in enumerate(
@@ -168,7 +168,7 @@ def write_archive(out: Path, evolution: Evolution) -> dict[str, Any] | None:
     _write_json(out / "archive.json", data)
     temporary = out / "archive.csv.tmp"
     with temporary.open("w", newline="", encoding="utf-8") as handle:
-        writer = csv.writer(handle)
+        writer = csv.writer(handle, lineterminator="\n")
         writer.writerow(["cell", *data["descriptors"], "fitness", "generation", "index", "genome"])
         for elite in archive.ordered():
             writer.writerow(
@@ -220,4 +220,4 @@ def _trim_population(folder: Path, generations: int) -> None:
         rows = list(csv.reader(handle))
     kept = [rows[0], *(row for row in rows[1:] if int(row[0]) < generations)] if rows else []
     with path.open("w", newline="", encoding="utf-8") as handle:
-        csv.writer(handle).writerows(kept)
+        csv.writer(handle, lineterminator="\n").writerows(kept)

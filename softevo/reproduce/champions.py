@@ -98,7 +98,8 @@ def champions(experiments: Experiments, out: Path) -> list[dict[str, Any]]:
                 row[f"duration_{factor}x"] = duration
             rows.append(row)
     with (out / "champions.csv").open("w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=list(rows[0]) if rows else ["shape"])
+        columns = list(rows[0]) if rows else ["shape"]
+        writer = csv.DictWriter(handle, fieldnames=columns, lineterminator="\n")
         writer.writeheader()
         writer.writerows(rows)
     return rows

@@ -97,7 +97,7 @@ def write_qd(
 ) -> list[Path]:
     """qd.csv, qd.md, qd.png (per box and variant) and qd_archives.png (seed 1's archives)."""
     with (out / "qd.csv").open("w", newline="") as handle:
-        writer = csv.DictWriter(handle, COLUMNS)
+        writer = csv.DictWriter(handle, COLUMNS, lineterminator="\n")
         writer.writeheader()
         writer.writerows(rows)
     lines = [

@@ -43,7 +43,7 @@ def write_tables(
     rows: list[dict[str, Any]], out: Path, notes: list[str], appendix: Sequence[str] = ()
 ) -> None:
     with (out / "results.csv").open("w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=COLUMNS)
+        writer = csv.DictWriter(handle, fieldnames=COLUMNS, lineterminator="\n")
         writer.writeheader()
         writer.writerows(rows)
     lines = ["# softevo reproduce: results", "", *notes, ""]

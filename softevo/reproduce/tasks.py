@@ -91,7 +91,7 @@ def _row(task: str, ga: list[dict[str, Any]], random: list[dict[str, Any]]) -> d
 def write_suite(rows: list[dict[str, Any]], out: Path, command: str, wall: float) -> list[Path]:
     """tasks.csv, tasks.md and tasks.png (GA against random search, per task)."""
     with (out / "tasks.csv").open("w", newline="") as handle:
-        writer = csv.DictWriter(handle, COLUMNS)
+        writer = csv.DictWriter(handle, COLUMNS, lineterminator="\n")
         writer.writeheader()
         writer.writerows(rows)
     lines = [

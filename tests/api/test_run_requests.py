@@ -9,6 +9,8 @@ from typing import Any
 import pytest
 from fastapi.testclient import TestClient
 
+from tests.api.finished import finished
+
 QUICK: dict[str, Any] = {"preset": "quick", "population": 4, "generations": 1}
 
 
@@ -61,3 +63,10 @@ def test_a_terrain_kind_alone_takes_its_defaults(client: TestClient, kind: str) 
     assert response.status_code == 201, response.text
     terrain = response.json()["config"]["sim"]["terrain"]
     assert terrain["kind"] == kind and len(terrain) > 2, terrain
+
+
+def test_the_curve_as_csv_ends_its_lines_as_the_cli_does(client: TestClient) -> None:
+    body = {**QUICK, "shape": [2, 2, 2], "sim": {"duration": 0.5, "settle_time": 0.1}}
+    run = finished(client, client.post("/runs", json=body).json()["id"])
+    text = client.get(f"/runs/{run['id']}/curve?format=csv").content
+    assert text.count(b"\n") == 2 and b"\r" not in text  # header and one generation, LF

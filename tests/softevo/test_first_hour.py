@@ -52,3 +52,6 @@ def test_map_elites_without_a_map_takes_the_presets(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr
     archive = json.loads((out / "archive.json").read_text())
     assert archive["descriptors"] == ["voxels", "actuated"] and archive["bins"] == [8, 8]
+    for name in ("curve.csv", "population.csv", "archive.csv"):  # LF, as the API's CSV
+        text = (out / name).read_bytes()
+        assert b"\n" in text and b"\r" not in text, name
