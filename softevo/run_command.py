@@ -58,7 +58,11 @@ def add_parser(commands: Any) -> None:
         help="voxel-phase: every actuated voxel evolves its own phase and amplitude (co-design)",
     )  # fmt: skip
     run.add_argument("--seed", type=int, help="random seed (0)")
-    run.add_argument("--population", type=int, metavar="P")
+    run.add_argument(
+        "--population", type=int, metavar="P",
+        help="robots per generation, each simulated once (default: the preset's, 16 for quick, "
+        "25 for paper-voxel and the tasks)",
+    )  # fmt: skip
     run.add_argument(
         "--generations", type=int, metavar="G", help="generations (with --resume: go on to G)"
     )

@@ -60,8 +60,9 @@ def add_parser(commands: Any) -> None:
     )  # fmt: skip
     parser.add_argument(
         "--out",
-        help="output folder (docs/experiments; with --tasks docs/experiments/tasks, with --qd "
-        "docs/experiments/qd)",
+        help="output folder, relative to the current folder (default docs/experiments; with "
+        "--tasks docs/experiments/tasks, with --qd docs/experiments/qd: the repository's own "
+        "when run from its root); the full path is printed first",
     )
     parser.add_argument(
         "--url", help="a running service (token from SOFTEVO_API_TOKEN); default: start one"
@@ -89,12 +90,12 @@ def reproduce_command(args: argparse.Namespace) -> int:
         (out / ".write-test").touch()
         (out / ".write-test").unlink()
     except OSError as error:
-        args.parser.error(f"--out {out}: cannot write there ({error.strerror})")
+        args.parser.error(f"--out {out.absolute()}: cannot write there ({error.strerror})")
     started = time.monotonic()
     flags = " --quick" if args.quick else ""
     if suite is not None:
         return _suite(args, out, started, suite)
-    print(f"softevo reproduce{flags}: results in {out}/", flush=True)
+    print(f"softevo reproduce{flags}: results in {out.absolute()}/", flush=True)
     phase1 = breathing_cube(out, args.quick)
     try:
         with service(args.url, out, args.workers, args.resume) as client:
@@ -123,7 +124,7 @@ def _suite(args: argparse.Namespace, out: Path, started: float, suite: str) -> i
     command = f"softevo reproduce --{suite}{flags} --out {out}" + (
         f" --url {args.url}" if args.url else ""
     )
-    print(f"{command}: results in {out}/", flush=True)
+    print(f"{command}: results in {out.absolute()}/", flush=True)
     try:
         with service(args.url, out, args.workers, args.resume) as client:
             if suite == "qd":

@@ -55,3 +55,27 @@ def test_map_elites_without_a_map_takes_the_presets(tmp_path: Path) -> None:
     for name in ("curve.csv", "population.csv", "archive.csv"):  # LF, as the API's CSV
         text = (out / name).read_bytes()
         assert b"\n" in text and b"\r" not in text, name
+
+
+def test_every_option_of_the_first_commands_says_what_it_does() -> None:
+    from softevo.cli import build_parser
+
+    commands = build_parser()._subparsers._group_actions[0].choices  # type: ignore[union-attr]
+    silent = [
+        f"{name} {action.option_strings or action.dest}"
+        for name, parser in commands.items()
+        if name in ("run", "simulate", "export", "replay", "reproduce")
+        for action in parser._actions
+        if not action.help
+    ]
+    assert silent == [], silent
+
+
+def test_reproduce_names_its_out_folder_in_full(tmp_path: Path) -> None:
+    """--out is relative to the current folder: its help says so and errors give the full path."""
+    (tmp_path / "a_file").write_text("")
+    done = softevo("reproduce", "--quick", "--out", "a_file/results", cwd=tmp_path)
+    assert done.returncode == 2
+    assert f"--out {tmp_path / 'a_file' / 'results'}: cannot write there" in done.stderr
+    help_text = " ".join(softevo("reproduce", "--help").stdout.split())
+    assert "relative to the current folder" in help_text
