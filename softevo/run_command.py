@@ -72,6 +72,12 @@ def add_parser(commands: Any) -> None:
         help="fitness: " + "; ".join(f"{k}: {v[0]} ({v[1]})" for k, v in OBJECTIVES.items()),
     )  # fmt: skip
     run.add_argument(
+        "--objectives", type=_names, metavar="A,-B",
+        help="several objectives at once, measures of the simulation (a leading - minimises), "
+        "e.g. speed,-cost_of_transport, with --algorithm nsga2 or afpo: adds hypervolume and "
+        "front_size to the curve (docs/evolution.md)",
+    )  # fmt: skip
+    run.add_argument(
         "--terrain", type=terrain_json, metavar="JSON",
         help=f"the ground: {TERRAIN_EXAMPLES}; the task-* presets come with theirs",
     )  # fmt: skip
@@ -119,7 +125,7 @@ def add_parser(commands: Any) -> None:
 def _request(args: argparse.Namespace) -> dict[str, Any]:
     request: dict[str, Any] = {"preset": args.preset or "quick", "seed": args.seed or 0}
     for name in ("shape", "encoding", "population", "generations", "algorithm", "options",
-                 "descriptors", "bins"):  # fmt: skip
+                 "descriptors", "bins", "objectives"):  # fmt: skip
         if getattr(args, name) is not None:
             request[name] = getattr(args, name)
     if args.objective is not None:
@@ -233,7 +239,8 @@ def _evolution(args: argparse.Namespace) -> tuple[Evolution, Path]:
 
 
 _CONFIG_FLAGS = ("preset", "shape", "encoding", "seed", "population", "duration", "objective",
-                 "terrain", "algorithm", "options", "descriptors", "bins")  # fmt: skip
+                 "objectives", "terrain", "algorithm", "options", "descriptors",
+                 "bins")  # fmt: skip
 
 
 def _figures(out: Path, evolution: Evolution) -> None:
