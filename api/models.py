@@ -124,9 +124,10 @@ class Individual(Base):
     parents: Mapped[list[int]] = mapped_column(JSON)
     status: Mapped[str] = mapped_column(String(16), default=IndividualStatus.PENDING.value)
     fitness: Mapped[float | None] = mapped_column(Float)
-    #: measured heading (degrees, `SimResult.heading`); NULL: failed, cached copy of an
-    #: older revision's row, or stored before revision 0003
-    heading: Mapped[float | None] = mapped_column(Float)
+    #: record of measures (name -> number or null, `SimResult.measures`); NULL while pending,
+    #: {} for a robot that could not be built; rows from before revision 0004 hold the fitness
+    #: under its measure's name and the heading
+    measures: Mapped[dict[str, float | None] | None] = mapped_column(JSON)
     eval_seconds: Mapped[float | None] = mapped_column(Float)
     worker: Mapped[str | None] = mapped_column(String(128))
     evaluated_at: Mapped[datetime | None] = mapped_column()

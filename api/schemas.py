@@ -180,8 +180,8 @@ class IndividualPublic(BaseModel):
     index: int
     fitness: float | None
     measures: dict[str, float | None] | None = Field(
-        description="what the simulation measured, by name (docs/physics.md, \"Measures and "
-        "objectives\"): speed, forward_speed, climb_rate, distance, heading, energy, "
+        description='what the simulation measured, by name (docs/physics.md, "Measures and '
+        'objectives"): speed, forward_speed, climb_rate, distance, heading, energy, '
         "cost_of_transport, efficiency, stable (1 or 0), ...; null for a value not measured "
         "(energy, unless the objective needs it), {} for a robot that could not be built, null "
         "while pending. Rows stored before revision 0004 hold the fitness's measure and heading"

@@ -24,7 +24,7 @@ from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
 from softevo.core.evaluator import BatchResult, Evaluator, Measures, refuse_dropped
-from softevo.core.nulls import to_null
+from softevo.core.nulls import to_null, to_null_record
 from softevo.core.objectives import NEEDS_ENERGY
 from softevo.core.physics import simulate, simulate_batch
 from softevo.core.robot import Robot, VoxelRobot
@@ -34,7 +34,8 @@ from softevo.core.settings import sim_settings
 
 def evaluate_robot_files(robot_files: Sequence[dict[str, Any]]) -> Measures:
     """The job function: robot files in, each one's `fitness` (its file's `objective`, speed by
-    default) and `heading` (`SimResult.heading`, degrees) out; None for a failed robot."""
+    default; None: failed) and record of `measures` (`SimResult.measures`, None for a value not
+    measured, the whole record None for a robot that could not be built) out, JSON-safe."""
     robots: list[Robot | None] = []
     for document in robot_files:
         try:
@@ -47,12 +48,12 @@ def evaluate_robot_files(robot_files: Sequence[dict[str, Any]]) -> Measures:
     results = simulate_batch(built, energy=energy, small_alone=True) if built else []
     simulated = iter(zip(results, objectives, strict=True))
     fitness: list[float | None] = []
-    heading: list[float | None] = []
+    measures: list[dict[str, float | None] | None] = []
     for robot in robots:
         result, objective = next(simulated) if robot is not None else (None, "")
         fitness.append(None if result is None else to_null(result.measure(objective)))
-        heading.append(None if result is None else to_null(result.heading))
-    return {"fitness": fitness, "heading": heading}
+        measures.append(None if result is None else to_null_record(result.measures()))
+    return {"fitness": fitness, "measures": measures}
 
 
 def _timed(name: str, evaluate: Callable[[], Measures]) -> BatchResult:
@@ -152,7 +153,7 @@ class PoolEvaluator(Evaluator):
 
     def _run(self, files: list[dict[str, Any]], key: str) -> Measures:
         if not files:
-            return {"fitness": [], "heading": []}
+            return {"fitness": [], "measures": []}
         attempt = 1
         while True:
             with self._lock:

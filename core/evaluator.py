@@ -26,34 +26,72 @@ from typing import Any, Self
 import numpy as np
 
 from softevo.core.limits import BATCH_SIZE, IN_FLIGHT
-from softevo.core.nulls import from_nulls
+from softevo.core.nulls import from_null, from_null_record, from_nulls
 
-#: The job function's output, JSON-safe: `fitness` and `heading` lists, None for a failed robot.
-Measures = dict[str, list[float | None]]
+#: The job function's output, JSON-safe: `fitness`, a number or None (failed) per robot, and
+#: `measures`, a record per robot (name -> number or None; None: no record), see `BatchResult`.
+Measures = dict[str, list[Any]]
 
 
 @dataclass(frozen=True)
 class BatchResult:
     """One batch's fitness (NaN = failed), who evaluated it, how long it took (s), and each
-    robot's heading (`SimResult.heading`, degrees; NaN = failed; None: not measured), which the
-    `heading` descriptor needs."""
+    robot's record of measures (`SimResult.measures`: name -> value, NaN = not measured; empty
+    for a robot that could not be built; None: no records at all), which objectives and
+    behavioural descriptors read by name."""
 
     fitness: np.ndarray
     worker: str
     seconds: float
-    heading: np.ndarray | None = None
+    measures: list[dict[str, float]] | None = None
 
     @classmethod
     def measured(cls, measured: Measures, worker: str, seconds: float) -> BatchResult:
-        """From the job function's output (`Measures`)."""
-        fitness, heading = from_nulls(measured["fitness"]), from_nulls(measured["heading"])
-        return cls(fitness, worker, seconds, heading)
+        """From the job function's output (`Measures`); a worker of the release before records
+        sent a `heading` list instead, which becomes a record of that one measure."""
+        fitness = from_nulls(measured["fitness"])
+        if "measures" in measured:
+            records = [from_null_record(record) for record in measured["measures"]]
+        elif "heading" in measured:
+            records = [{"heading": from_null(value)} for value in measured["heading"]]
+        else:
+            records = None
+        return cls(fitness, worker, seconds, records)
 
-    def headings(self) -> np.ndarray:
-        """Every robot's heading, NaN where not measured."""
-        if self.heading is None:
-            return np.full(len(self.fitness), np.nan)
-        return np.asarray(self.heading, dtype=np.float64)
+    def records(self) -> list[dict[str, float]]:
+        """Every robot's record, empty where none was measured."""
+        if self.measures is None:
+            return [{} for _ in range(len(self.fitness))]
+        return self.measures
+
+
+def well_formed(measured: dict[str, Any], robots: int) -> bool:
+    """A job's output that `BatchResult.measured` takes, for `robots` robots: `fitness`, a number
+    or None each, and `measures`, a record (name -> number or None) or None each; or, from a
+    worker of the release before records, `heading`, a number or None each."""
+    if not _numbers(measured.get("fitness"), robots):
+        return False
+    if "measures" not in measured:
+        return _numbers(measured.get("heading"), robots)
+    records = measured["measures"]
+    return (
+        isinstance(records, list)
+        and len(records) == robots
+        and all(
+            record is None
+            or (isinstance(record, dict) and _numbers(list(record.values()), len(record)))
+            for record in records
+        )
+    )
+
+
+def _numbers(values: Any, robots: int) -> bool:
+    """A list of a number or None per robot."""
+    return (
+        isinstance(values, list)
+        and len(values) == robots
+        and all(v is None or type(v) in (int, float) for v in values)
+    )
 
 
 class BatchDroppedError(RuntimeError):

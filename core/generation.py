@@ -43,14 +43,15 @@ class Hooks:
 
     def individuals(
         self, generation: int, individuals: list[Individual]
-    ) -> tuple[dict[int, float], dict[int, float]]:
+    ) -> tuple[dict[int, float], dict[int, dict[str, float]]]:
         """The generation is about to be evaluated: keep it; return fitness already known for
         some of its members (by index; NaN = failed), which are then not simulated again, and
-        the headings known for them (a member without one gets NaN)."""
+        the records of measures known for them (a member without one gets an empty record)."""
         return {}, {}
 
     def batch(self, generation: int, indices: list[int], result: BatchResult) -> None:
-        """One batch's fitness landed (for `indices` of the generation, in order)."""
+        """One batch's fitness and measures landed (for `indices` of the generation, in
+        order)."""
 
 
 @dataclass(frozen=True)
@@ -59,7 +60,7 @@ class Step:
 
     individuals: list[Individual]
     fitness: np.ndarray  # of every individual, in order (NaN = failed)
-    heading: np.ndarray  # of every individual, in order (degrees; NaN = failed or unknown)
+    measures: list[dict[str, float]]  # of every individual, in order (empty: none known)
     evaluated: frozenset[int]  # indices whose fitness came from this step (not from the cache)
     stats: GenerationStats
     state: GAState  # the state after the generation was told
@@ -102,17 +103,17 @@ class Engine:
         evaluator: Evaluator,
         hooks: Hooks | None = None,
         key: str = "local",
-        headings: dict[str, float] | None = None,
+        measures: dict[str, dict[str, float]] | None = None,
     ) -> Step:
         """Run generation `state.generation`. `cache` (genome hash -> fitness of the run's
-        earlier generations) gains this generation's new genomes, and so does `headings`
-        (genome hash -> heading, beside it); `key` prefixes batch keys."""
+        earlier generations) gains this generation's new genomes, and so does `measures`
+        (genome hash -> record of measures, beside it); `key` prefixes batch keys."""
         hooks = hooks or Hooks()
-        headings = {} if headings is None else headings
+        measures = {} if measures is None else measures
         started = time.perf_counter()
         generation = state.generation
         individuals = self.algorithm.ask(state)
-        known, known_heading = hooks.individuals(generation, individuals)
+        known, known_measures = hooks.individuals(generation, individuals)
         hashes = [individual.genome.hash for individual in individuals]
         first: dict[str, int] = {}
         for index, genome_hash in enumerate(hashes):
@@ -120,13 +121,13 @@ class Engine:
                 first[genome_hash] = index
         todo = [index for index in first.values() if index not in known]
         fitness = {index: known[index] for index in first.values() if index in known}
-        heading = {index: known_heading.get(index, np.nan) for index in fitness}
+        records = {index: known_measures.get(index, {}) for index in fitness}
         if todo:
             files = [self.robot_file(individuals[i]) for i in todo]
 
             def landed(positions: list[int], result: BatchResult) -> None:
                 indices = [todo[p] for p in positions]
-                heading.update(zip(indices, result.headings().tolist(), strict=True))
+                records.update(zip(indices, result.records(), strict=True))
                 hooks.batch(generation, indices, result)
 
             values = evaluate_in_batches(
@@ -136,18 +137,18 @@ class Engine:
             )  # fmt: skip
             fitness.update(zip(todo, values.tolist(), strict=True))
         cache.update({hashes[index]: value for index, value in fitness.items()})
-        headings.update({hashes[index]: value for index, value in heading.items()})
+        measures.update({hashes[index]: record for index, record in records.items()})
         values = np.array([cache[h] for h in hashes], dtype=np.float64)
-        directions = np.array([headings.get(h, np.nan) for h in hashes], dtype=np.float64)
+        found = [measures.get(h, {}) for h in hashes]
         evaluations = len(first)
         following, stats = self.algorithm.tell(
             state,
             individuals,
             values,
-            measures=[{"heading": direction} for direction in directions.tolist()],
+            measures=found,
             evaluations=evaluations,
             saved=len(individuals) - evaluations,
         )
         seconds = time.perf_counter() - started
         evaluated = frozenset(first.values())
-        return Step(individuals, values, directions, evaluated, stats, following, seconds)
+        return Step(individuals, values, found, evaluated, stats, following, seconds)

@@ -5,7 +5,7 @@ statistics of a generation where all failed) is `null` in JSON and NULL in the d
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 
 import numpy as np
 
@@ -26,3 +26,15 @@ def to_nulls(values: Iterable[float]) -> list[float | None]:
 
 def from_nulls(values: Iterable[float | None]) -> np.ndarray:
     return np.array([from_null(value) for value in values], dtype=np.float64)
+
+
+def to_null_record(record: Mapping[str, float]) -> dict[str, float | None]:
+    """A record of measures (name -> value) as JSON keeps it: NaN as None."""
+    return {name: value if math.isfinite(value) else None for name, value in record.items()}
+
+
+def from_null_record(record: Mapping[str, float | None] | None) -> dict[str, float]:
+    """A record of measures as JSON kept it, None as NaN (a missing record: empty)."""
+    if not record:
+        return {}
+    return {name: math.nan if value is None else float(value) for name, value in record.items()}

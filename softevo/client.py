@@ -228,7 +228,8 @@ class Run:
         return self.client.get(f"/runs/{self.id}/curve")["generations"]
 
     def individuals(self, generation: int | None = None) -> list[dict[str, Any]]:
-        """Every individual (all pages), or one generation's: fitness, status, parents, ..."""
+        """Every individual (all pages), or one generation's: fitness, `measures` (what its
+        simulation measured, by name; docs/physics.md), status, parents, ..."""
         items: list[dict[str, Any]] = []
         while True:
             params: dict[str, Any] = {"offset": len(items), "limit": 5000}

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import TracebackType
 from typing import Any
@@ -20,6 +20,7 @@ from typing import Any
 from softevo.core.config import ConfigError, RunConfig, resolve
 from softevo.core.evaluator import Evaluator
 from softevo.core.evolution import Evolution, Progress
+from softevo.core.nulls import to_null_record
 from softevo.core.robot import Robot, build_mechanics, dropped_voxels
 from softevo.core.robot_file import RobotFileError, load_robot, parse_robot, robot_to_json, with_sim
 
@@ -41,7 +42,9 @@ class Result:
     """A run's outcome as plain JSON values, the files `softevo run` writes: `config`
     (config.json), `curve` (curve.json's rows, also the API's `GET /runs/{id}/curve`), `best`
     (best_robot.json, a softevo.robot/1 file), `state` (state.json), `archive` (archive.json,
-    None for a run without descriptors)."""
+    None for a run without descriptors), `measures` (cache.json's: every simulated genome's
+    record of measures by genome hash, name -> value or None; docs/physics.md) and
+    `best_measures` (the best robot's record)."""
 
     config: dict[str, Any]
     curve: list[dict[str, Any]]
@@ -53,12 +56,16 @@ class Result:
     evaluations: int  # simulations run
     saved: int  # fitness values taken from the run's cache instead
     wall_seconds: float  # simulating and breeding (not writing files), to the ms
+    measures: dict[str, dict[str, float | None]] = field(default_factory=dict)
+    best_measures: dict[str, float | None] | None = None
 
     @classmethod
     def of(cls, evolution: Evolution) -> Result:
         """The result of `evolution` so far (finished or not)."""
         best = evolution.best_robot()
         archive = evolution.state.archive
+        measures = {key: to_null_record(record) for key, record in evolution.measures.items()}
+        best_hash = None if evolution.state.best is None else evolution.state.best[0].hash
         return cls(
             config=evolution.config.to_json(),
             curve=evolution.curve(),
@@ -70,6 +77,8 @@ class Result:
             evaluations=evolution.evaluations,
             saved=evolution.saved,
             wall_seconds=round(evolution.elapsed, 3),
+            measures=measures,
+            best_measures=None if best is None else measures.get(best_hash, {}),
         )
 
     def to_json(self) -> dict[str, Any]:
@@ -77,6 +86,7 @@ class Result:
         best = None
         if self.best is not None:
             best = {"speed": self.best_fitness, "generation": self.best_generation}
+            best["measures"] = self.best_measures
             best["robot"] = self.best
         return {
             "run": self.config,

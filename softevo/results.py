@@ -8,9 +8,10 @@ interrupted run still has its partial results (population.csv gets each generati
     best_robot.json   the fastest robot so far, a softevo.robot/1 file
     state.json        the genetic algorithm's state (JSON), for inspection or resuming
     cache.json        the fitness of every genome simulated so far (by genome hash), their
-                      headings (a run with the `heading` descriptor) and the wall time, with
+                      records of measures (`measures`: name -> value) and the wall time, with
                       state.json what `softevo run --resume DIR` goes on from
-    population.csv    every individual: generation, index, fitness (empty: failed), operator
+    population.csv    every individual: generation, index, fitness (empty: failed), operator,
+                      then its measures, one column each (docs/physics.md; empty: not measured)
     curve.png, population.png, diversity.png   the run's figures, written at the end
     archive.json, archive.csv, archive.png     a run with descriptors: its MAP-Elites archive
                       (one row per filled cell) and heat map
@@ -32,14 +33,15 @@ from softevo.core.evolution import CURVE_COLUMNS, Evolution
 from softevo.core.ga.algorithm import GAState
 from softevo.core.ga.stats import QD_COLUMNS
 from softevo.core.limits import SAVE_SECONDS
-from softevo.core.nulls import from_null, to_null
+from softevo.core.nulls import from_null, from_null_record, to_null
 from softevo.library import Result
 
 
-def _write_json(path: Path, data: Any) -> None:
+def _write_json(path: Path, data: Any, indent: int | None = 1) -> None:
     """Write atomically (temp file + rename) so a crash never leaves half a file."""
     temporary = path.with_suffix(path.suffix + ".tmp")
-    temporary.write_text(json.dumps(data, indent=1, allow_nan=False) + "\n", encoding="utf-8")
+    text = json.dumps(data, indent=indent, allow_nan=False)
+    temporary.write_text(text + "\n", encoding="utf-8")
     os.replace(temporary, path)
 
 
@@ -49,19 +51,15 @@ def write_results(out: Path, evolution: Evolution) -> None:
     _write_json(out / "config.json", result.config)
     _write_json(out / "curve.json", {"run": result.config, "generations": result.curve})
     _write_json(out / "state.json", result.state)
-    headings = (  # only a run that uses them keeps them: other runs' files stay as they were
-        {"heading": {key: to_null(value) for key, value in evolution.headings.items()}}
-        if "heading" in evolution.config.descriptors
-        else {}
-    )
-    _write_json(
+    _write_json(  # one line, by the C encoder: every genome's record, rewritten every second
         out / "cache.json",
         {
             "generation": evolution.state.generation,  # of state.json, checked on resuming
             "elapsed": evolution.elapsed,
             "fitness": {key: to_null(value) for key, value in evolution.cache.items()},
-            **headings,
+            "measures": result.measures,
         },
+        indent=None,
     )
     if result.best is not None:
         _write_json(out / "best_robot.json", result.best)
@@ -97,11 +95,11 @@ class Checkpoints:
     def done(self) -> None:
         append_population(self.out, self.evolution)
         # the run as it is now (a step replaces its state and counters, and adds to its cache
-        # and headings in place), kept until written: an interrupt during the write leaves it
+        # and measures in place), kept until written: an interrupt during the write leaves it
         # to `flush`
         evolution = self.evolution
         self.whole = replace(
-            evolution, cache=dict(evolution.cache), headings=dict(evolution.headings)
+            evolution, cache=dict(evolution.cache), measures=dict(evolution.measures)
         )
         if time.monotonic() - self.written >= self.seconds:
             self.flush()
@@ -117,27 +115,48 @@ POPULATION_COLUMNS = ("generation", "index", "fitness", "operator")
 
 
 def append_population(out: Path, evolution: Evolution) -> None:
-    """Add the generation just evaluated to population.csv (started afresh at generation 0)."""
+    """Add the generation just evaluated to population.csv (started afresh at generation 0):
+    `POPULATION_COLUMNS`, then one column per measure of the first generation's records (a file
+    begun before records keeps its own columns)."""
     state = evolution.state
     if state.previous is None or state.previous_fitness is None:
         return
     generation = state.generation - 1
     path = out / "population.csv"
+    records = [evolution.measures.get(item.genome.hash, {}) for item in state.previous]
+    if generation == 0:
+        names = list(dict.fromkeys(name for record in records for name in record))
+    else:
+        names = _population_header(path)[len(POPULATION_COLUMNS) :]
     with path.open("w" if generation == 0 else "a", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle, lineterminator="\n")
         if generation == 0:
-            writer.writerow(POPULATION_COLUMNS)
-        for index, (item, value) in enumerate(
-            zip(state.previous, state.previous_fitness, strict=True)
+            writer.writerow([*POPULATION_COLUMNS, *names])
+        for index, (item, value, record) in enumerate(
+            zip(state.previous, state.previous_fitness, records, strict=True)
         ):
             writer.writerow(
-                [generation, index, "" if not math.isfinite(value) else value, item.operator]
-            )
+                [generation, index, _cell(value), item.operator,
+                 *(_cell(record.get(name, math.nan)) for name in names)]
+            )  # fmt: skip
+
+
+def _cell(value: float) -> float | str:
+    """A number as population.csv writes it: empty when not finite (failed, not measured)."""
+    return value if math.isfinite(value) else ""
+
+
+def _population_header(path: Path) -> list[str]:
+    try:
+        with path.open(newline="", encoding="utf-8") as handle:
+            return next(csv.reader(handle), [])
+    except FileNotFoundError:
+        return []
 
 
 def read_results(folder: Path) -> tuple[dict[str, Any], list[dict[str, Any]], list[dict[str, Any]]]:
     """(config, curve rows, individuals) of a `softevo run` output folder; ValueError if it is
-    not one."""
+    not one. An individual's `measures` are population.csv's measure columns (None: empty)."""
     try:
         curve = json.loads((folder / "curve.json").read_text(encoding="utf-8"))
     except (OSError, ValueError) as error:
@@ -153,6 +172,11 @@ def read_results(folder: Path) -> tuple[dict[str, Any], list[dict[str, Any]], li
                         "index": int(row["index"]),
                         "fitness": float(row["fitness"]) if row["fitness"] else None,
                         "operator": row["operator"],
+                        "measures": {
+                            name: float(value) if value else None
+                            for name, value in row.items()
+                            if name not in POPULATION_COLUMNS
+                        },
                     }
                 )
     return curve.get("run", {}), curve.get("generations", []), individuals
@@ -203,11 +227,21 @@ def read_resumable(folder: Path, generations: int | None = None) -> Evolution:
         config = resolve(config_json)
     except ConfigError as error:
         raise ValueError(f"{folder}/config.json: {error}") from None
-    fitness = {key: from_null(value) for key, value in cache["fitness"].items()}
-    headings = {key: from_null(value) for key, value in cache.get("heading", {}).items()}
+    try:
+        fitness = {key: from_null(value) for key, value in cache["fitness"].items()}
+        measures, elapsed = _measures(cache), float(cache.get("elapsed", 0.0))
+    except (AttributeError, KeyError, TypeError, ValueError) as error:
+        raise ValueError(f"{folder}/cache.json: not a run's cache ({error!r})") from None
     _trim_population(folder, state.generation)
-    elapsed = float(cache.get("elapsed", 0.0))
-    return Evolution.resume(config, state, fitness, elapsed, headings)
+    return Evolution.resume(config, state, fitness, elapsed, measures)
+
+
+def _measures(cache: dict[str, Any]) -> dict[str, dict[str, float]]:
+    """cache.json's records by genome hash; a folder written before records kept a run's
+    headings alone (`heading`, a run with that descriptor), which become records of it."""
+    if "measures" in cache:
+        return {key: from_null_record(record) for key, record in cache["measures"].items()}
+    return {key: {"heading": from_null(value)} for key, value in cache.get("heading", {}).items()}
 
 
 def _trim_population(folder: Path, generations: int) -> None:

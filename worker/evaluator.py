@@ -41,6 +41,7 @@ from softevo.core.evaluator import (
     Evaluator,
     batch_digest,
     refuse_dropped,
+    well_formed,
 )
 from softevo.worker.queue import (
     JOB_FUNCTION,
@@ -112,7 +113,7 @@ class RQEvaluator(Evaluator):
             np.concatenate([part.fitness for part in parts]),
             ",".join(sorted({part.worker for part in parts if part.worker})),
             sum(part.seconds for part in parts),
-            np.concatenate([part.headings() for part in parts]),
+            [record for part in parts for record in part.records()],
         )
 
     def capacity(self) -> int:
@@ -347,11 +348,8 @@ def parse_result(raw: bytes | str, robots: int) -> dict[str, Any] | None:
         return None
     if "fitness" in payload:
         seconds = payload.get("seconds")
-        for values in (payload["fitness"], payload.get("heading")):  # a number each, or None
-            if not isinstance(values, list) or len(values) != robots:
-                return None
-            if not all(v is None or type(v) in (int, float) for v in values):
-                return None
+        if not well_formed(payload, robots):
+            return None
         if type(seconds) not in (int, float) or seconds < 0:
             return None
         return payload

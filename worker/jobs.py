@@ -1,4 +1,4 @@
-"""The jobs an RQ worker runs: a batch of robot files in, fitness and headings out, pushed onto
+"""The jobs an RQ worker runs: a batch of robot files in, fitness and measures out, pushed onto
 the batch's result list (`softevo.worker.queue.result_key`) so the coordinator wakes at once; and
 a replay of one robot (its frames), pushed the same way. Plain JSON both ways.
 
@@ -47,7 +47,7 @@ def replay(
     try:
         (document,) = robot_files
         data = replay_frames(parse_robot(document), float(fps), int(max_positions))
-        payload: dict[str, Any] = {"fitness": [data["speed"]], "heading": [None], "replay": data}
+        payload: dict[str, Any] = {"fitness": [data["speed"]], "measures": [None], "replay": data}
     except (RobotFileError, ValueError, TypeError) as error:
         payload = {"error": f"{type(error).__name__}: {error}"[:1000]}
     payload.update(worker=worker, seconds=time.perf_counter() - started, robots=1)

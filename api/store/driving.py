@@ -2,14 +2,15 @@
 earlier generations already have, a generation's individuals (one multi-row insert), batches'
 fitness (one statement for any number of batches) and the generation's commit (its fitness,
 statistics, GA state and counters, and the next generation's members, all or nothing); each
-individual's measured heading is written and read beside its fitness. Every
+individual's record of measures (`SimResult.measures`, a JSON object in `individuals.measures`)
+is written and read beside its fitness. Every
 write is fenced by the lease in its own transaction (`leases.owns`), so a coordinator that lost
 the run can never write over its successor."""
 
 from __future__ import annotations
 
-import math
-from collections.abc import Sequence
+import json
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -20,7 +21,7 @@ from softevo.api.models import Generation, Individual, Run
 from softevo.api.store import leases
 from softevo.api.store.runs import now
 from softevo.api.store.statements import DriverStatement
-from softevo.core.nulls import from_null, to_null
+from softevo.core.nulls import from_null, from_null_record, to_null, to_null_record
 from softevo.core.status import IndividualStatus, RunStatus
 
 CURVE_FIELDS = (
@@ -63,33 +64,34 @@ def load(db: Database, run_id: int) -> tuple[dict[str, Any], dict[str, Any] | No
 
 def known_fitness(
     db: Database, run_id: int, before: int
-) -> tuple[dict[str, float], dict[str, float]]:
+) -> tuple[dict[str, float], dict[str, dict[str, float]]]:
     """Fitness (NaN = failed) of every genome evaluated in generations before `before`, and
-    their headings (NaN = failed or stored before revision 0003), by genome hash."""
+    their records of measures (NaN = not measured; rows upgraded from before revision 0004 hold
+    the fitness's measure and the heading), by genome hash."""
     with db.read() as session:
         rows = session.execute(
-            select(Individual.genome_hash, Individual.fitness, Individual.heading).where(
+            select(Individual.genome_hash, Individual.fitness, Individual.measures).where(
                 Individual.run_id == run_id,
                 Individual.generation < before,
                 Individual.status != IndividualStatus.PENDING,
             )
         ).all()
         fitness = {genome_hash: from_null(value) for genome_hash, value, _ in rows}
-        return fitness, {genome_hash: from_null(heading) for genome_hash, _, heading in rows}
+        return fitness, {genome_hash: from_null_record(record) for genome_hash, _, record in rows}
 
 
 def keep_generation(
     db: Database, run_id: int, lease: Lease, generation: int, members: Sequence[dict[str, Any]]
-) -> tuple[dict[int, float], dict[int, float]]:
+) -> tuple[dict[int, float], dict[int, dict[str, float]]]:
     """Insert the generation's members (dicts of genome, genome_hash, operator, parents), once;
     if it was kept before (a takeover), check it is the same and return the fitness and
-    headings saved (by index)."""
+    records of measures saved (by index)."""
     with db.writing() as connection:
         _fence(connection, run_id, lease)
         columns = INDIVIDUALS.c
         rows = connection.execute(
             select(columns["index"], columns.genome_hash, columns.status, columns.fitness,
-                   columns.heading)
+                   columns.measures)
             .where(columns.run_id == run_id, columns.generation == generation)
         ).all()  # fmt: skip
         if not rows:
@@ -105,7 +107,7 @@ def keep_generation(
                                                       IndividualStatus.FAILED)]  # fmt: skip
         return (
             {row.index: from_null(row.fitness) for row in done},
-            {row.index: from_null(row.heading) for row in done},
+            {row.index: from_null_record(row.measures) for row in done},
         )
 
 
@@ -119,17 +121,18 @@ _SET_FITNESS = DriverStatement(
     )
     .values(
         fitness=bindparam("b_fitness"),
-        heading=bindparam("b_heading"),
+        measures=bindparam("b_measures"),
         status=bindparam("b_status"),
         eval_seconds=bindparam("b_seconds"),
         worker=bindparam("b_worker"),
         evaluated_at=bindparam("b_at"),
     ),
     postgres_rows=f"""
-    UPDATE individuals SET fitness = v.b_fitness, heading = v.b_heading, status = v.b_status,
-        eval_seconds = v.b_seconds, worker = v.b_worker, evaluated_at = v.b_at
+    UPDATE individuals SET fitness = v.b_fitness, measures = v.b_measures::json,
+        status = v.b_status, eval_seconds = v.b_seconds, worker = v.b_worker,
+        evaluated_at = v.b_at
     FROM json_to_recordset(%(b_rows)s::json) AS v(b_index integer, b_fitness float8,
-        b_heading float8, b_status text, b_seconds float8, b_worker text, b_at timestamptz)
+        b_measures text, b_status text, b_seconds float8, b_worker text, b_at timestamptz)
     WHERE individuals.run_id = %(b_run)s AND individuals.generation = %(b_generation)s
         AND individuals."index" = v.b_index AND individuals.status = '{_PENDING}'""",
     scalars=("b_run", "b_generation"),
@@ -140,12 +143,12 @@ _SET_FITNESS = DriverStatement(
 class Landed:
     """One batch's fitness (by index in its generation; NaN = failed), the worker that
     evaluated it, the seconds each of its robots took (None for fitness from the cache) and
-    their headings (by index; missing or NaN: stored as NULL)."""
+    their records of measures (by index; NaN: stored as null; missing: an empty record)."""
 
     fitness: dict[int, float]
     worker: str | None
     seconds_each: float | None
-    heading: dict[int, float] = field(default_factory=dict)
+    measures: Mapping[int, Mapping[str, float]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -161,7 +164,7 @@ class GenerationCommit:
     stats: dict[str, Any]
     state: dict[str, Any] | EncodedJSON
     cached: dict[int, float] = field(default_factory=dict)
-    cached_heading: dict[int, float] = field(default_factory=dict)  # headings of `cached`
+    cached_measures: Mapping[int, Mapping[str, float]] = field(default_factory=dict)  # of `cached`
     landed: Sequence[Landed] = ()
     best: tuple[float, int] | None = None
     done: bool = False
@@ -177,13 +180,18 @@ def _fitness_rows(
     return [
         {"b_run": run_id, "b_generation": generation, "b_index": index,
          "b_fitness": to_null(value), "b_seconds": to_null(batch.seconds_each),
-         "b_heading": to_null(batch.heading.get(index, math.nan)),
+         "b_measures": measures_text(batch.measures.get(index)),
          "b_worker": None if batch.worker is None else batch.worker[:128], "b_at": at,
          "b_status": (status or (IndividualStatus.EVALUATED if to_null(value) is not None
                                  else IndividualStatus.FAILED)).value}
         for batch in landed
         for index, value in batch.fitness.items()
     ]  # fmt: skip
+
+
+def measures_text(record: Mapping[str, float] | None) -> EncodedJSON:
+    """A record of measures as `individuals.measures` stores it: a JSON object, NaN as null."""
+    return EncodedJSON(json.dumps(to_null_record(record)) if record else "{}")
 
 
 def _set_fitness(connection: Connection, rows: list[dict[str, Any]]) -> None:
@@ -283,7 +291,7 @@ def commit_generation(db: Database, run_id: int, lease: Lease, commit: Generatio
     with db.writing() as connection:
         _fence(connection, run_id, lease)
         rows = _fitness_rows(run_id, generation, commit.landed)
-        cached = [Landed(commit.cached, None, None, commit.cached_heading)]
+        cached = [Landed(commit.cached, None, None, commit.cached_measures)]
         rows += _fitness_rows(run_id, generation, cached, IndividualStatus.CACHED)
         _set_fitness(connection, rows)
         at = now()

@@ -203,6 +203,7 @@ def individual_json(row: Individual, population: int) -> dict[str, Any]:
         "index": row.index,
         "fitness": to_null(row.fitness),
         "status": row.status,
+        "measures": row.measures,
         "operator": row.operator,
         "parents": row.parents,
         "genome_hash": row.genome_hash,

@@ -101,6 +101,27 @@ class SimResult:
         """The fitness of this result under `objective` (softevo.core.objectives)."""
         return float(getattr(self, OBJECTIVE_MEASURES[objective]))
 
+    def measures(self) -> dict[str, float]:
+        """Every number this simulation measured, by name (NaN: not measured, or not stable):
+        the record kept per individual (job results, the run's cache, the store, population.csv,
+        the API), which objectives and behavioural descriptors read by name. The one place that
+        defines them; a new measure is one line here and one in docs/physics.md ("Measures and
+        objectives"). Not measures: `wall_seconds` and `steps` (of the run, not the robot)."""
+        return {
+            "distance": self.distance,
+            "speed": self.speed,
+            "forward_speed": self.forward_speed,
+            "climb_rate": self.climb_rate,
+            "heading": self.heading,
+            "energy": self.energy,
+            "cost_of_transport": self.cost_of_transport,
+            "efficiency": self.efficiency,
+            "stable": 1.0 if self.stable else 0.0,
+            "total_mass": self.total_mass,
+            "masses": float(self.masses),
+            "springs": float(self.springs),
+        }
+
     def to_json(self) -> dict:
         """The `softevo simulate` output (no final positions)."""
         return {

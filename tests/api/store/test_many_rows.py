@@ -36,7 +36,7 @@ def stored(db: Database, run_id: int) -> list[tuple[Any, ...]]:
             select(
                 columns["index"], cast(columns.genome, Text), columns.genome_hash,
                 columns.operator, cast(columns.parents, Text), columns.status, columns.fitness,
-                columns.heading, columns.eval_seconds, columns.worker,
+                cast(columns.measures, Text), columns.eval_seconds, columns.worker,
             )
             .where(columns.run_id == run_id)
             .order_by(columns["index"])
@@ -46,9 +46,14 @@ def stored(db: Database, run_id: int) -> list[tuple[Any, ...]]:
 
 def test_many_rows_store_what_one_row_at_a_time_stores(db: Database) -> None:
     landed = [
-        Landed({0: 0.5, 1: math.nan, 2: -1e-12}, 'w,"1"', 0.1, {0: 12.5, 2: math.nan}),
+        Landed(
+            {0: 0.5, 1: math.nan, 2: -1e-12},
+            'w,"1"',
+            0.1,
+            {0: {"heading": 12.5, "energy": math.nan}, 2: {"heading": math.nan}},
+        ),
         Landed({3: 2.0, 0: 9.0}, None, None),  # index 0 again: the first fitness stays
-        Landed({4: 1.0, 5: 0.0}, "w{}", 0.3, {4: -180.0}),
+        Landed({4: 1.0, 5: 0.0}, "w{}", 0.3, {4: {"heading": -180.0}}),
     ]
     one_by_one, at_once = driven(db), driven(db)
     with db.writing() as connection:  # the members one statement each
@@ -59,15 +64,16 @@ def test_many_rows_store_what_one_row_at_a_time_stores(db: Database) -> None:
     store.driving.keep_generation(db, at_once, OWNER, 0, awkward_members())
     for batch in landed:
         for index, value in batch.fitness.items():
-            single = Landed({index: value}, batch.worker, batch.seconds_each, batch.heading)
+            single = Landed({index: value}, batch.worker, batch.seconds_each, batch.measures)
             store.driving.save_fitness(db, one_by_one, OWNER, 0, [single])
     store.driving.save_fitness(db, at_once, OWNER, 0, landed)
 
     rows = stored(db, at_once)
     assert rows == stored(db, one_by_one)
     assert [json.loads(row[1])["tag"] for row in rows] == AWKWARD
-    assert rows[0][5:] == ("evaluated", 0.5, 12.5, 0.1, 'w,"1"')
-    assert rows[1][5:7] == ("failed", None)
+    assert rows[0][5:7] == ("evaluated", 0.5) and rows[0][8:] == (0.1, 'w,"1"')
+    assert json.loads(rows[0][7]) == {"heading": 12.5, "energy": None}  # NaN: null
+    assert rows[1][5:8] == ("failed", None, "{}")  # no record: an empty one
     assert rows[6][5:] == ("pending", None, None, None, None)
     with db.read() as session:  # one timestamp for the call, read back as UTC
         times = set(session.scalars(select(Individual.evaluated_at).where(
@@ -84,5 +90,5 @@ def test_a_seconds_figure_that_is_not_finite_is_stored_as_null(db: Database) -> 
     store.driving.keep_generation(db, run_id, OWNER, 0, awkward_members())
     store.driving.save_fitness(db, run_id, OWNER, 0, [Landed({0: 0.5, 1: 0.25}, "w", math.nan)])
     rows = stored(db, run_id)
-    assert [row[5:9] for row in rows[:2]] == [("evaluated", 0.5, None, None),
-                                              ("evaluated", 0.25, None, None)]  # fmt: skip
+    assert [row[5:9] for row in rows[:2]] == [("evaluated", 0.5, "{}", None),
+                                              ("evaluated", 0.25, "{}", None)]  # fmt: skip

@@ -1,69 +1,174 @@
-"""The measured heading in the store (revision 0003), on SQLite and PostgreSQL: written with the
-fitness to the last bit, read back by what a successor reads, and NULL (NaN) for individuals
-stored before the revision, which still load."""
+"""Each individual's record of measures in the store (revision 0004), on SQLite and PostgreSQL:
+written with the fitness to the last bit, read back by what a successor reads; and a database of
+the release before (revision 0003: a `heading` column, no records) upgraded with its values
+intact, read, taken over and finished with the undisturbed curve and archive, and downgraded."""
 
 from __future__ import annotations
 
 import math
+import threading
+from typing import Any
 
 import pytest
+from alembic import command
 from sqlalchemy import text
 
 from softevo.api import store
-from softevo.api.db import Database
+from softevo.api.coordinator import Coordinator
+from softevo.api.db import Database, alembic_config
 from softevo.api.store.driving import GenerationCommit, Landed
+from softevo.core.config import resolve
+from softevo.core.evaluation import SerialEvaluator
+from softevo.core.evaluator import BatchResult
+from softevo.core.ga.algorithm import GAState
 from tests.api.store.test_store import OWNER, STATS, driven, members
+from tests.api.test_coordinator import wait_status
+from tests.reference import undisturbed
 
 #: a heading whose last bits a float32 or a decimal round trip would lose
 EXACT = math.degrees(math.atan2(0.1, -0.3))
+RECORD = {"speed": 0.1 + 0.2, "heading": EXACT, "energy": math.nan, "stable": 1.0}
 
 
-def test_a_heading_is_written_with_its_fitness_and_read_back_to_the_bit(db: Database) -> None:
+def same(found: dict[str, float], expected: dict[str, float]) -> bool:
+    """The same names and, to the bit, the same values (NaN for NaN)."""
+    return found.keys() == expected.keys() and all(
+        found[name].hex() == expected[name].hex() for name in expected
+    )
+
+
+def test_a_record_is_written_with_its_fitness_and_read_back_to_the_bit(db: Database) -> None:
     run_id = driven(db)
     store.driving.keep_generation(db, run_id, OWNER, 0, members())
-    landed = [Landed({0: 0.5, 1: math.nan}, "w1", 0.1, {0: EXACT, 1: math.nan})]
+    landed = [Landed({0: 0.5, 1: math.nan}, "w1", 0.1, {0: RECORD, 1: {"stable": 0.0}})]
     store.driving.save_fitness(db, run_id, OWNER, 0, landed)
-    fitness, heading = store.driving.keep_generation(db, run_id, OWNER, 0, members())  # successor
-    assert fitness[0] == 0.5 and math.isnan(fitness[1]) and set(fitness) == set(heading) == {0, 1}
-    assert heading[0].hex() == EXACT.hex() and math.isnan(heading[1])
+    fitness, measures = store.driving.keep_generation(db, run_id, OWNER, 0, members())  # successor
+    assert fitness[0] == 0.5 and math.isnan(fitness[1]) and set(fitness) == set(measures) == {0, 1}
+    assert same(measures[0], RECORD) and measures[1] == {"stable": 0.0}
     store.driving.commit_generation(
         db, run_id, OWNER,
-        GenerationCommit(STATS, {"seed": 1}, cached={3: 0.5}, cached_heading={3: EXACT},
-                         landed=[Landed({2: 0.25}, "w2", 0.1, {2: -45.0})], best=(0.5, 0),
+        GenerationCommit(STATS, {"seed": 1}, cached={3: 0.5}, cached_measures={3: RECORD},
+                         landed=[Landed({2: 0.25}, "w2", 0.1)], best=(0.5, 0),
                          upcoming=members("n")),
     )  # fmt: skip
-    fitness, heading = store.driving.known_fitness(db, run_id, 1)
+    fitness, measures = store.driving.known_fitness(db, run_id, 1)
     assert fitness == {"x0": 0.5, "x1": fitness["x1"], "x2": 0.25, "x3": 0.5}
-    assert heading["x0"].hex() == heading["x3"].hex() == EXACT.hex() and heading["x2"] == -45.0
-    assert math.isnan(heading["x1"])
+    assert same(measures["x0"], RECORD) and same(measures["x3"], RECORD)
+    assert measures["x2"] == {}  # landed without a record
+    items, _ = store.list_individuals(db, store.get_run(db, run_id), 0, 0, 10)
+    assert items[0]["measures"] == {**RECORD, "energy": None} and items[2]["measures"] == {}
+
+
+def at_revision_0003(db: Database, objective: str) -> int:
+    """A run of the release before, at revision 0003: four individuals of generation 0 as it
+    stored them (evaluated, failed, cached, pending), each fitness and heading in a column."""
+    db.upgrade("0003")
+    config = resolve({"preset": "quick", "population": 4, "objective": objective})
+    run = store.create_run(db, config)
+    rows = [("evaluated", 0.125, EXACT), ("failed", None, None), ("cached", 0.125, EXACT),
+            ("pending", None, None)]  # fmt: skip
+    with db.engine.begin() as connection:
+        for index, (status, fitness, heading) in enumerate(rows):
+            connection.execute(
+                text(
+                    'INSERT INTO individuals (run_id, generation, "index", genome, genome_hash, '
+                    "operator, parents, status, fitness, heading) VALUES (:run, 0, :index, '{}', "
+                    ":hash, 'random', '[]', :status, :fitness, :heading)"
+                ),
+                {"run": run.id, "index": index, "hash": f"x{index}", "status": status,
+                 "fitness": fitness, "heading": heading},
+            )  # fmt: skip
+    return run.id
 
 
 @pytest.mark.empty_database
-def test_individuals_stored_before_revision_0003_load_with_no_heading(database_url: str) -> None:
-    """A database at 0002 with an evaluated generation, upgraded: its fitness is as it was, its
-    headings are NaN (no cell for the `heading` descriptor), and the run's rows still load."""
+@pytest.mark.parametrize("objective", ["speed", "forward"])
+def test_a_database_of_revision_0003_upgrades_with_its_values_intact(
+    database_url: str, objective: str
+) -> None:
     db = Database(database_url)
     try:
-        db.upgrade("0002")
-        run_id = driven(db)
-        with db.engine.begin() as connection:
-            for index in range(4):
-                connection.execute(
-                    text(
-                        'INSERT INTO individuals (run_id, generation, "index", genome, '
-                        "genome_hash, operator, parents, status, fitness) VALUES (:run, 0, "
-                        ":index, '{}', :hash, 'random', '[]', 'evaluated', :fitness)"
-                    ),
-                    {"run": run_id, "index": index, "hash": f"x{index}", "fitness": index / 8},
-                )
+        run_id = at_revision_0003(db, objective)
         db.upgrade()
-        fitness, heading = store.driving.known_fitness(db, run_id, 1)
-        assert fitness == {f"x{i}": i / 8 for i in range(4)}
-        assert set(heading) == set(fitness) and all(math.isnan(h) for h in heading.values())
-        known, known_heading = store.driving.keep_generation(db, run_id, OWNER, 0, members())
-        assert known == {i: i / 8 for i in range(4)}
-        assert all(math.isnan(h) for h in known_heading.values())
+        name = {"speed": "speed", "forward": "forward_speed"}[objective]
+        fitness, measures = store.driving.known_fitness(db, run_id, 1)
+        assert fitness["x0"] == fitness["x2"] == 0.125 and math.isnan(fitness["x1"])
+        assert same(measures["x0"], {name: 0.125, "heading": EXACT}) and measures["x1"] == {}
+        assert "x3" not in measures  # pending: nothing measured yet
         items, total = store.list_individuals(db, store.get_run(db, run_id), 0, 0, 10)
-        assert total == 4 and [item["fitness"] for item in items] == [i / 8 for i in range(4)]
+        assert total == 4 and [item["fitness"] for item in items] == [0.125, None, 0.125, None]
+        assert [item["measures"] for item in items][1:] == [{}, {name: 0.125, "heading": EXACT},
+                                                             None]  # fmt: skip
+        downgrade(db, "0003")
+        with db.engine.connect() as connection:
+            headings = connection.execute(
+                text('SELECT heading FROM individuals ORDER BY "index"')
+            ).scalars()
+            found = [h if h is None else h.hex() for h in headings]
+            assert found == [EXACT.hex(), None, EXACT.hex(), None]
+    finally:
+        db.dispose()
+
+
+def downgrade(db: Database, revision: str) -> None:
+    """The migrations undone down to `revision`, as `softevo.api.db.upgrade` applies them."""
+    config = alembic_config()
+    with db.engine.begin() as connection:
+        config.attributes["connection"] = connection
+        command.downgrade(config, revision)
+
+
+QD_REQUEST = {"preset": "quick", "seed": 3, "population": 8, "generations": 4,
+              "sim": {"duration": 1.0}, "algorithm": "map-elites",
+              "descriptors": ["heading", "actuated"], "bins": [6, 3]}  # fmt: skip
+
+
+class Stopping(SerialEvaluator):
+    """Evaluates `calls` batches, then waits until released (the coordinator is stopped)."""
+
+    def __init__(self, calls: int) -> None:
+        super().__init__()
+        self.calls, self.release, self.held = calls, threading.Event(), threading.Event()
+
+    def evaluate_batch(self, robot_files: Any, key: str | None = None) -> BatchResult:
+        self.calls -= 1
+        if self.calls < 0:
+            self.held.set()
+            self.release.wait(60)
+        return super().evaluate_batch(robot_files, key)
+
+
+@pytest.mark.empty_database
+def test_a_run_stored_at_revision_0003_is_taken_over_with_the_undisturbed_curve(
+    database_url: str,
+) -> None:
+    """A MAP-Elites run over the measured `heading`, stopped half way, its database taken down
+    to 0003 (what the release before stored: the heading alone), upgraded, and finished: the
+    curve and the archive are those of the run undisturbed."""
+    db = Database(database_url)
+    try:
+        db.upgrade()
+        run = store.create_run(db, resolve(QD_REQUEST))
+        stopping = Stopping(calls=6)
+        first = Coordinator(db, stopping, batch_size=2, poll_seconds=0.05)
+        first.start()
+        assert stopping.held.wait(60)
+        first.stop()
+        stopping.release.set()
+        done = store.get_run(db, run.id).generations_done
+        assert 0 < done < QD_REQUEST["generations"]
+        downgrade(db, "0003")
+        db.upgrade()
+        second = Coordinator(db, SerialEvaluator(), batch_size=2, poll_seconds=0.05)
+        second.start()
+        try:
+            assert wait_status(db, run.id, ("completed", "failed")) == "completed"
+        finally:
+            second.stop()
+        reference = undisturbed(QD_REQUEST)
+        assert store.curve(db, run.id) == reference.curve()
+        state = GAState.from_json(store.driving.load(db, run.id)[1])
+        assert state.archive is not None and reference.state.archive is not None
+        assert state.archive.to_json() == reference.state.archive.to_json()
     finally:
         db.dispose()

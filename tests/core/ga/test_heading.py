@@ -13,6 +13,7 @@ from softevo.core.config import ConfigError, resolve
 from softevo.core.evaluation import PoolEvaluator, SerialEvaluator, evaluate_robot_files
 from softevo.core.evolution import Evolution
 from softevo.core.ga.descriptors import CATALOGUE, MEASURED, describe
+from softevo.core.nulls import to_null_record
 from softevo.core.physics import simulate, simulate_batch
 from softevo.core.robot import Actuation, VoxelRobot
 from softevo.core.robot_file import robot_to_json
@@ -55,7 +56,9 @@ def test_heading_is_the_same_bits_alone_batched_and_through_the_job_function() -
     assert [r.heading.hex() for r in batched[1::2]] == [alone.heading.hex()] * 2
     files = [robot_to_json(robot), {"format": "nonsense"}, robot_to_json(other)]
     measured = evaluate_robot_files(files)
-    assert measured["heading"] == [alone.heading, None, batched[0].heading]
+    records = measured["measures"]
+    assert records[1] is None  # a robot that could not be built has no record
+    assert [records[0]["heading"], records[2]["heading"]] == [alone.heading, batched[0].heading]
     assert measured["fitness"][0] == alone.speed and measured["fitness"][1] is None
 
 
@@ -99,7 +102,7 @@ def test_a_genome_met_again_keeps_its_heading_from_the_cache() -> None:
         while not forgetful.done:
             forgetful.step(evaluator)
             forgetful.cache.clear()
-            forgetful.headings.clear()
+            forgetful.measures.clear()
     assert forgetful.state.archive.to_json() == whole.state.archive.to_json()
 
 
@@ -110,21 +113,13 @@ def test_a_run_resumed_from_its_folder_ends_with_the_same_heading_archive(tmp_pa
         half.run(evaluator)
         write_results(tmp_path, half)
         cache = json.loads((tmp_path / "cache.json").read_text())
-        assert set(cache["heading"]) == set(cache["fitness"])
+        assert set(cache["measures"]) == set(cache["fitness"])
         resumed = read_resumable(tmp_path, HEADING["generations"])
-        assert resumed.headings == half.headings
+        kept = {key: to_null_record(record) for key, record in resumed.measures.items()}
+        assert kept == {key: to_null_record(record) for key, record in half.measures.items()}
         resumed.run(evaluator)
     assert resumed.state.archive.to_json() == whole.state.archive.to_json()
     assert resumed.curve() == whole.curve()
-
-
-def test_a_run_without_heading_writes_no_headings_to_its_cache_file(tmp_path) -> None:
-    plain = run({**HEADING, "descriptors": ["voxels"], "bins": [4], "generations": 1},
-                SerialEvaluator())  # fmt: skip
-    write_results(tmp_path, plain)
-    assert set(json.loads((tmp_path / "cache.json").read_text())) == {
-        "generation", "elapsed", "fitness",
-    }  # fmt: skip
 
 
 def test_a_bad_descriptor_name_lists_the_catalogue_with_heading() -> None:

@@ -54,6 +54,7 @@ def test_small_chunks_alone_give_the_batched_bits(energy: bool, batched_calls: l
         assert one.final_positions.tobytes() == many.final_positions.tobytes()
         assert (one.com_start, one.com_end, one.speed) == (many.com_start, many.com_end, many.speed)
         assert one.heading == many.heading
+        assert str(one.measures()) == str(many.measures())  # every measure, NaN where NaN
         assert np.array_equal(one.energy, many.energy, equal_nan=True)
         assert one.speed == simulate(robot, energy=energy)[0].speed
 
