@@ -3,7 +3,10 @@
 
 Drives `paper-voxel` runs (4x4x4, population 25) through the service's `Coordinator` on SQLite
 and on PostgreSQL with an evaluator that simulates nothing (a robot's fitness is a cheap function
-of its file; a batch sleeps S seconds per robot, 0.05 by default, as a worker's wall time). The
+of its file; a batch sleeps S seconds per robot, 0.05 by default, as a worker's wall time). Its
+batches come back as a real job's do: the job function's JSON output (with each robot's record of
+measures, or its heading in a tree of the release before records) turned into a `BatchResult` by
+the tree's own `BatchResult.measured`, so each tree's coordinator pays for what it keeps. The
 CPU seconds of the run's process, less the stand-in's own fitness arithmetic (a worker's work,
 timed with `thread_time`), are the coordinator's: breeding, robot files, batches, the store's
 writes and the generation commits. Each run is a fresh interpreter. Prints CPU per
@@ -15,7 +18,7 @@ cells) interleaved with the GA's and prints MAP-Elites' CPU per individual again
 `--tree PATH` also measures another checkout (an older commit in a `git worktree`, of today's
 layout or of the old one with top-level `core` and `api`), its runs interleaved with this
 checkout's in the same invocation, and prints the ratio: the same runs, the same evaluator, each
-version's own coordinator and store.
+version's own coordinator and store; with `--algorithms map-elites`, of MAP-Elites runs.
 """
 
 from __future__ import annotations
@@ -64,24 +67,33 @@ def instant_evaluator(found: dict[str, Any], sim_seconds: float = 0.0) -> Any:
     `evaluate_batch`, `evaluate`, `workers` and `concurrency` before), no simulation: a batch
     sleeps `sim_seconds` per robot (wall time as a worker's, none of this process's CPU)."""
     batch_result = found["BatchResult"]
+    fields = getattr(batch_result, "__dataclass_fields__", {})
+    form = "measures" if "measures" in fields else "heading" if "heading" in fields else None
 
     class Instant:
         concurrency = 2
 
         def evaluate(self, files: list[dict]) -> np.ndarray:
+            return np.array([0.0 if v is None else v for v in self.job(files)["fitness"]])
+
+        def job(self, files: list[dict]) -> dict[str, list[Any]]:
+            """What the job function sends back, in the tree's own form (`job_output`)."""
             if sim_seconds:
                 time.sleep(sim_seconds * len(files))
             started = time.thread_time()  # the fitness arithmetic is a worker's, not this
-            fitness = np.array([  # process's: its CPU is taken out of the figure (`drive`)
+            fitness = [  # process's: its CPU is taken out of the figure (`drive`)
                 (f["voxels"].count("sine") + f["voxels"].count("neg_sine")) / len(f["voxels"])
                 for f in files
-            ])  # fmt: skip
+            ]  # fmt: skip
+            output = job_output(fitness, form)
             with STAND_IN_LOCK:
                 STAND_IN_CPU[0] += time.thread_time() - started
-            return fitness
+            return output
 
         def evaluate_batch(self, files: list[dict], key: str | None = None) -> Any:
-            return batch_result(self.evaluate(files), "instant", 0.0)
+            if form is None:  # a tree whose results hold fitness alone
+                return batch_result(self.evaluate(files), "instant", 0.0)
+            return batch_result.measured(self.job(files), "instant", 0.0)  # as a real backend
 
         def capacity(self) -> int:
             return 2
@@ -102,6 +114,30 @@ def instant_evaluator(found: dict[str, Any], sim_seconds: float = 0.0) -> Any:
         if getattr(base, "__abstractmethods__", None):  # the ABC of this version
             return type("InstantEvaluator", (Instant, base), {})()
     return Instant()
+
+
+#: A simulation's record of measures (`SimResult.measures`), for trees that keep it: the stand-in
+#: sends one per robot, as a real job does (energy not measured: a speed run).
+MEASURES = (
+    "distance", "speed", "forward_speed", "climb_rate", "heading", "energy", "cost_of_transport",
+    "efficiency", "stable", "total_mass", "masses", "springs",
+)  # fmt: skip
+
+
+def job_output(fitness: list[float], form: str | None) -> dict[str, list[Any]]:
+    """The job function's JSON output for these speeds: with each robot's record of measures
+    (`form` "measures", this layout), its heading alone (the release before records), or
+    neither. Values made up from the speed, but as many and as varied as a simulation's."""
+    output: dict[str, list[Any]] = {"fitness": list(fitness)}
+    if form == "heading":
+        output["heading"] = [speed * 360.0 - 180.0 for speed in fitness]
+    elif form == "measures":
+        output["measures"] = [
+            {name: None if name == "energy" else speed * (1.0 + 0.1 * k)
+             for k, name in enumerate(MEASURES)}
+            for speed in fitness
+        ]  # fmt: skip
+    return output
 
 
 #: CPU seconds the stand-in evaluator spent on its fitness arithmetic (all threads), and its lock.
@@ -233,14 +269,15 @@ def main() -> None:
     print(
         f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
         f"Python {platform.python_version()}, {args.generations} generations of 25, "
-        f"{args.sim_seconds:g} s per robot, median of {args.repeats} (trees interleaved)"
+        f"{args.sim_seconds:g} s per robot, median of {args.repeats} (trees interleaved), "
+        f"{algorithms[0]}"
     )
     print("database  tree                CPU/individual  wall/generation  generations/s")
     for database in ("sqlite", "postgres"):
         rows: dict[str, list[tuple[float, float, int, int]]] = {label: [] for label, _ in trees}
         for _ in range(args.repeats):
             for label, path in trees:
-                rows[label].append(run_once(label, path, database, args))
+                rows[label].append(run_once(label, path, database, args, algorithms[0]))
         cpu_of = {}
         for label, _ in trees:
             cpu = statistics.median(c / n for c, _, n, _ in rows[label]) * 1e3
