@@ -38,17 +38,25 @@ def archive_figure(archive: dict[str, Any], title: str, label: str) -> Figure:
     if len(names) > 1:
         second = CATALOGUE[names[1]]
         extent[2:] = [second.low, second.high]
-        axes.set_ylabel(f"{second.name}: {second.help}")
+        axes.set_ylabel(_wrapped(f"{second.name}: {second.help}"))
     else:
         axes.set_yticks([])
     image = axes.imshow(
         grid.T, origin="lower", extent=extent, aspect="auto", cmap="viridis", interpolation="none"
     )
     axes.grid(False)
-    axes.set_xlabel(f"{first.name}: {first.help}")
+    axes.set_xlabel(_wrapped(f"{first.name}: {first.help}", 60))
     filled = int(np.isfinite(grid).sum())
     folded = " (best over " + names[2] + ")" if len(names) > 2 else ""
     axes.set_title(f"{title}\n{filled} of {grid.size} cells filled{folded}", fontsize=9)
     figure.colorbar(image, ax=axes, label=f"elite's {label}")
     figure.tight_layout()
     return figure
+
+
+def _wrapped(label: str, width: int = 36) -> str:
+    """An axis label in lines of at most `width` characters: a descriptor's help is longer than
+    the axis, and a y label that long ran into the title."""
+    import textwrap
+
+    return "\n".join(textwrap.wrap(label, width))
