@@ -28,7 +28,7 @@ from softevo.core.nulls import to_null, to_null_record
 from softevo.core.objectives import NEEDS_ENERGY
 from softevo.core.physics import simulate, simulate_batch
 from softevo.core.robot import Robot, VoxelRobot
-from softevo.core.robot_file import RobotFileError, file_objective, parse_robot
+from softevo.core.robot_file import RobotFileError, file_energy, file_objective, parse_robot
 from softevo.core.settings import sim_settings
 
 
@@ -44,7 +44,9 @@ def evaluate_robot_files(robot_files: Sequence[dict[str, Any]]) -> Measures:
             robots.append(None)
     objectives = [file_objective(d) for d, r in zip(robot_files, robots, strict=True) if r]
     built = [robot for robot in robots if robot is not None]
-    energy = any(objective in NEEDS_ENERGY for objective in objectives)
+    energy = any(objective in NEEDS_ENERGY for objective in objectives) or any(
+        file_energy(document) for document in robot_files
+    )
     results = simulate_batch(built, energy=energy, small_alone=True) if built else []
     simulated = iter(zip(results, objectives, strict=True))
     fitness: list[float | None] = []

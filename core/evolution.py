@@ -16,7 +16,7 @@ from typing import Any
 from softevo.core.config import RunConfig
 from softevo.core.evaluator import Evaluator
 from softevo.core.ga.algorithm import GAState, Individual, Strategy, make_strategy
-from softevo.core.ga.stats import CURVE_COLUMNS, QD_COLUMNS, GenerationStats
+from softevo.core.ga.stats import CURVE_COLUMNS, GenerationStats, curve_columns  # noqa: F401
 from softevo.core.generation import Engine
 from softevo.core.robot import Robot
 
@@ -137,7 +137,7 @@ class Evolution:
 
     def curve(self) -> list[dict[str, Any]]:
         """One row per finished generation, with the columns of `CURVE_COLUMNS` (and
-        `QD_COLUMNS` for a run with an archive)."""
-        columns = CURVE_COLUMNS + (QD_COLUMNS if self.config.descriptors else ())
+        `QD_COLUMNS` for a run with an archive, `PARETO_COLUMNS` for one with objectives)."""
+        columns = curve_columns(bool(self.config.descriptors), bool(self.config.objectives))
         rows = (stats.to_json() for stats in self.state.history)
         return [{column: row[column] for column in columns} for row in rows]

@@ -23,6 +23,7 @@ from softevo.core.encodings import Encoding
 from softevo.core.evaluator import BatchResult, Evaluator, evaluate_in_batches
 from softevo.core.ga.algorithm import GAState, Individual, Strategy
 from softevo.core.ga.stats import GenerationStats
+from softevo.core.ga.vectors import needs_energy
 from softevo.core.limits import BATCH_SIZE, IN_FLIGHT
 from softevo.core.robot_file import robot_to_json
 from softevo.core.settings import SimSettings
@@ -90,11 +91,20 @@ class Engine:
 
     def robot_file(self, individual: Individual) -> dict[str, Any]:
         """The individual's robot file; one measured by another objective than `speed` says so
-        (a `speed` file stays as it always was, so are its batch keys)."""
+        (a `speed` file stays as it always was, so are its batch keys), and one whose run's
+        objectives need the actuators' work asks for it."""
         document = robot_to_json(self.encoding.to_robot(individual.genome, self.sim), self.sim_json)
         if self.objective != "speed":
             document["objective"] = self.objective
+        if self.energy:
+            document["energy"] = True
         return document
+
+    @cached_property
+    def energy(self) -> bool:
+        """Whether the run's `objectives` read the actuators' work (its robot files ask for it;
+        a run without them sends the files it always did)."""
+        return needs_energy(self.algorithm.config.objectives)
 
     def step(
         self,

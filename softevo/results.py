@@ -29,9 +29,9 @@ from pathlib import Path
 from typing import Any
 
 from softevo.core.config import ConfigError, resolve
-from softevo.core.evolution import CURVE_COLUMNS, Evolution
+from softevo.core.evolution import Evolution
 from softevo.core.ga.algorithm import GAState
-from softevo.core.ga.stats import QD_COLUMNS
+from softevo.core.ga.stats import curve_columns
 from softevo.core.limits import SAVE_SECONDS
 from softevo.core.nulls import from_null, from_null_record, to_null
 from softevo.library import Result
@@ -66,7 +66,8 @@ def write_results(out: Path, evolution: Evolution) -> None:
     temporary = out / "curve.csv.tmp"
     with temporary.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle, lineterminator="\n")
-        columns = CURVE_COLUMNS + (QD_COLUMNS if evolution.config.descriptors else ())
+        config = evolution.config
+        columns = curve_columns(bool(config.descriptors), bool(config.objectives))
         writer.writerow(columns)
         for row in result.curve:
             writer.writerow(

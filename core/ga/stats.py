@@ -32,6 +32,14 @@ QD_COLUMNS = ("coverage", "qd_score")
 #: that set holds (`softevo.core.ga.vectors`, docs/evolution.md).
 PARETO_COLUMNS = ("hypervolume", "front_size")
 
+
+def curve_columns(descriptors: bool, objectives: bool) -> tuple[str, ...]:
+    """The curve's columns of a run with (or without) descriptors and objectives."""
+    return (
+        CURVE_COLUMNS + (QD_COLUMNS if descriptors else ()) + (PARETO_COLUMNS if objectives else ())
+    )
+
+
 #: Columns only some runs have: absent (not null) from a row that does not fill them.
 _OPTIONAL = frozenset(QD_COLUMNS + PARETO_COLUMNS)
 

@@ -1,0 +1,54 @@
+"""A run with several objectives end to end (issue 36): the library and `softevo run`, with the
+actuators' work measured because the objectives read it."""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+
+from softevo import library
+from softevo.core.ga import pareto
+from softevo.core.ga.vectors import objective_values, reference_point
+from tests.softevo.inprocess import softevo
+
+SMALL = {"preset": "quick", "shape": [2, 2, 2], "population": 6, "generations": 3,
+         "sim": {"duration": 1.0}, "seed": 3}  # fmt: skip
+OBJECTIVES = ["speed", "-cost_of_transport"]
+
+
+def test_library_nsga2_run_measures_energy_and_curves_its_front() -> None:
+    result = library.evolve(SMALL, algorithm="nsga2", objectives=OBJECTIVES, workers=1)
+    records = list(result.measures.values())
+    assert records and all(math.isfinite(r["cost_of_transport"]) for r in records)
+    config = library.configure(SMALL, objectives=OBJECTIVES)
+    speeds = np.array([r["speed"] for r in records])
+    values = objective_values(config.objectives, records, speeds)
+    last = result.curve[-1]
+    assert last["front_size"] == len(np.unique(values[pareto.nondominated_mask(values)], axis=0))
+    assert last["hypervolume"] == pareto.hypervolume(values, reference_point(config.objectives))
+    assert last["hypervolume"] > 0
+    again = library.evolve(SMALL, algorithm="nsga2", objectives=OBJECTIVES, workers=2)
+    assert again.curve == result.curve  # any number of workers
+
+
+def test_a_run_without_objectives_measures_no_energy_and_keeps_its_columns() -> None:
+    result = library.evolve(SMALL, algorithm="afpo", workers=1)
+    assert all(r["energy"] is None for r in result.measures.values())
+    assert "hypervolume" not in result.curve[-1]
+
+
+def test_softevo_run_writes_the_pareto_columns(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    done = softevo(
+        "run", "--preset", "quick", "--shape", "2x2x2", "--population", "6", "--generations",
+        "2", "--duration", "1", "--algorithm", "afpo", "--objectives=speed,-cost_of_transport",
+        "--workers", "1", "--out", str(out),
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    with (out / "curve.csv").open(encoding="utf-8") as handle:
+        rows = list(csv.DictReader(handle))
+    assert list(rows[0])[-2:] == ["hypervolume", "front_size"]
+    assert float(rows[-1]["hypervolume"]) > 0 and int(rows[-1]["front_size"]) >= 1
