@@ -79,3 +79,15 @@ def test_reproduce_names_its_out_folder_in_full(tmp_path: Path) -> None:
     assert f"--out {tmp_path / 'a_file' / 'results'}: cannot write there" in done.stderr
     help_text = " ".join(softevo("reproduce", "--help").stdout.split())
     assert "relative to the current folder" in help_text
+
+
+def test_the_readmes_example_folder_is_the_one_softevo_run_names() -> None:
+    """README's `softevo run --preset quick --seed 1` prints the folder default_out gives (the
+    hash covers the whole config, so a new setting changes it: update README and
+    docs/dashboard.md with it)."""
+    from softevo.run_command import default_out
+
+    folder = default_out(resolve({"preset": "quick", "seed": 1}))
+    root = Path(__file__).resolve().parents[2]
+    assert f"results in {folder}/" in (root / "README.md").read_text()
+    assert f"softevo plot {folder} " in (root / "docs" / "dashboard.md").read_text()
