@@ -15,6 +15,9 @@ interrupted run still has its partial results (population.csv gets each generati
     curve.png, population.png, diversity.png   the run's figures, written at the end
     archive.json, archive.csv, archive.png     a run with descriptors: its MAP-Elites archive
                       (one row per filled cell) and heat map
+    front.csv, front.png    a run with objectives: the non-dominated set of every individual
+                      evaluated (population.csv's columns), and every robot as a dot with the
+                      front drawn over them
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ from typing import Any
 
 from softevo.core.config import ConfigError, resolve
 from softevo.core.evolution import Evolution
+from softevo.core.front import front_rows
 from softevo.core.ga.algorithm import GAState
 from softevo.core.ga.stats import curve_columns
 from softevo.core.limits import SAVE_SECONDS
@@ -181,6 +185,23 @@ def read_results(folder: Path) -> tuple[dict[str, Any], list[dict[str, Any]], li
                     }
                 )
     return curve.get("run", {}), curve.get("generations", []), individuals
+
+
+def write_front(out: Path, individuals: list[dict[str, Any]], specs: Any) -> list[dict[str, Any]]:
+    """front.csv: the rows of `individuals` (`read_results`') on the run's front, with
+    population.csv's columns."""
+    rows = front_rows(specs, individuals)
+    names = list(individuals[0]["measures"]) if individuals else []
+    with (out / "front.csv").open("w", newline="", encoding="utf-8") as handle:
+        writer = csv.writer(handle, lineterminator="\n")
+        writer.writerow([*POPULATION_COLUMNS, *names])
+        for row in rows:
+            measures = row["measures"]
+            writer.writerow(
+                [row["generation"], row["index"], "" if row["fitness"] is None else row["fitness"],
+                 row["operator"], *("" if measures.get(n) is None else measures[n] for n in names)]
+            )  # fmt: skip
+    return list(rows)
 
 
 def write_archive(out: Path, evolution: Evolution) -> dict[str, Any] | None:

@@ -16,6 +16,7 @@ from softevo.core import figures
 from softevo.core.archive_figures import archive_figure
 from softevo.core.config import PRESET_DESCRIPTIONS, PRESETS, ConfigError, RunConfig, resolve
 from softevo.core.evolution import Evolution
+from softevo.core.front import front_figure
 from softevo.core.ga.descriptors import CATALOGUE
 from softevo.core.objectives import OBJECTIVES
 from softevo.library import Result, Run
@@ -24,6 +25,7 @@ from softevo.results import (
     read_results,
     read_resumable,
     write_archive,
+    write_front,
     write_results,
 )
 from softevo.resume_checks import ResumeError, check_folder
@@ -75,7 +77,7 @@ def add_parser(commands: Any) -> None:
         "--objectives", type=_names, metavar="A,-B",
         help="several objectives at once, measures of the simulation (a leading - minimises), "
         "e.g. speed,-cost_of_transport, with --algorithm nsga2 or afpo: adds hypervolume and "
-        "front_size to the curve (docs/evolution.md)",
+        "front_size to the curve, writes front.csv and front.png (docs/evolution.md)",
     )  # fmt: skip
     run.add_argument(
         "--terrain", type=terrain_json, metavar="JSON",
@@ -251,6 +253,11 @@ def _figures(out: Path, evolution: Evolution) -> None:
     figures.run_figures(
         curve, individuals, out, figures.run_title(as_stored), figures.fitness_label(as_stored)
     )
+    specs = evolution.config.objectives
+    if specs:
+        write_front(out, individuals, specs)
+        title = f"Pareto front: {figures.run_title(as_stored)}"
+        figures.save(front_figure(specs, individuals, title), out / "front.png")
     archive = write_archive(out, evolution)
     if archive is not None:
         title = f"MAP-Elites archive: {figures.run_title(as_stored)}"

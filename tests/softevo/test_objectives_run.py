@@ -10,8 +10,11 @@ from pathlib import Path
 import numpy as np
 
 from softevo import library
+from softevo.core.config import resolve
+from softevo.core.front import front_values
 from softevo.core.ga import pareto
 from softevo.core.ga.vectors import objective_values, reference_point
+from softevo.results import read_results
 from tests.softevo.inprocess import softevo
 
 SMALL = {"preset": "quick", "shape": [2, 2, 2], "population": 6, "generations": 3,
@@ -52,3 +55,15 @@ def test_softevo_run_writes_the_pareto_columns(tmp_path: Path) -> None:
         rows = list(csv.DictReader(handle))
     assert list(rows[0])[-2:] == ["hypervolume", "front_size"]
     assert float(rows[-1]["hypervolume"]) > 0 and int(rows[-1]["front_size"]) >= 1
+    assert (out / "front.png").stat().st_size > 0
+    config, _, individuals = read_results(out)
+    specs = resolve(config).objectives
+    with (out / "front.csv").open(encoding="utf-8") as handle:
+        front = [(int(r["generation"]), int(r["index"])) for r in csv.DictReader(handle)]
+    everyone = front_values(specs, individuals)
+    on_front = everyone[[(r["generation"], r["index"]) in front for r in individuals]]
+    assert len(on_front) == len(front) >= 1
+    for point in on_front:  # mutually non-dominated
+        assert not any(pareto.dominates(other, point) for other in on_front)
+    for point in everyone[~np.isnan(everyone).any(axis=1)]:  # the rest dominated or equal
+        assert any(pareto.dominates(f, point) or (f == point).all() for f in on_front)
