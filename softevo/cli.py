@@ -21,6 +21,7 @@ from typing import Any, NoReturn
 from softevo import (
     __version__,
     algorithms_command,
+    docs_command,
     plot_command,
     reproduce,
     run_command,
@@ -191,7 +192,11 @@ class Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = Parser(prog="softevo", description="Evolve modular soft crawling robots.")
+    parser = Parser(
+        prog="softevo",
+        description="Evolve modular soft crawling robots. The guides that help texts name as "
+        "docs/NAME.md are installed with softevo: `softevo docs NAME` prints one.",
+    )
     parser.add_argument("--version", action="version", version=f"softevo {__version__}")
     commands = parser.add_subparsers(
         dest="command", required=True, metavar="COMMAND", parser_class=Parser
@@ -201,6 +206,7 @@ def build_parser() -> argparse.ArgumentParser:
     reproduce.add_parser(commands)
     plot_command.add_parser(commands)
     service_commands.add_parsers(commands)
+    docs_command.add_parser(commands)
 
     simulate = commands.add_parser(
         "simulate",

@@ -91,3 +91,12 @@ def test_the_readmes_example_folder_is_the_one_softevo_run_names() -> None:
     root = Path(__file__).resolve().parents[2]
     assert f"results in {folder}/" in (root / "README.md").read_text()
     assert f"softevo plot {folder} " in (root / "docs" / "dashboard.md").read_text()
+
+
+def test_the_guides_help_points_to_are_shown_by_softevo_docs() -> None:
+    listed = softevo("docs")
+    assert listed.returncode == 0 and "tasks" in listed.stdout and "physics" in listed.stdout
+    shown = softevo("docs", "docs/tasks.md")
+    assert shown.returncode == 0 and shown.stdout.startswith("# Tasks")
+    missing = softevo("docs", "nothing")
+    assert missing.returncode == 1 and "guides:" in missing.stderr

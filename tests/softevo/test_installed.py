@@ -16,7 +16,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 #: What pyproject.toml builds the wheel from.
-PACKAGED = ("pyproject.toml", "README.md", "softevo", "core", "api", "worker", "migrations")
+PACKAGED = ("pyproject.toml", "README.md", "softevo", "core", "api", "worker", "migrations", "docs")
 
 
 def _clean_env() -> dict[str, str]:
@@ -76,6 +76,11 @@ def test_the_wheel_carries_what_reproduce_reads(installed: Path, tmp_path: Path)
     assert done.returncode == 0, done.stdout + done.stderr
     assert (out / "phase1_breathing_cube.png").read_bytes()[:4] == b"\x89PNG"
     assert "Phase 1" in (out / "results.md").read_text()
+    guide = subprocess.run(
+        [str(installed / "bin" / "softevo"), "docs", "tasks"],
+        capture_output=True, text=True, cwd=tmp_path, env=_clean_env(), timeout=60,
+    )  # fmt: skip
+    assert guide.returncode == 0 and guide.stdout.startswith("# Tasks"), guide.stderr
 
 
 def test_the_shipped_breathing_cube_is_the_example() -> None:
