@@ -102,10 +102,34 @@ class _Scene:
             hsv = np.stack([hue, np.full_like(hue, 0.55), np.full_like(hue, 0.85)], axis=1)
             actuated = np.isin(labels, ACTUATED_LABELS)
             self.colours[actuated] = hsv_to_rgb(hsv)[actuated]
+        self.legend = _legend(
+            labels, phased=isinstance(robot, VoxelRobot) and robot.phases is not None
+        )
         self.axes, self.towards = _camera()
         span = float(np.ptp(self.mechanics.positions, axis=0).max()) or 1.0
         self.span = span
         self.half = 1.1 * span + robot.sim.edge_length  # half the view's width (m): room to move
+
+
+#: The legend's names of the materials (robot-file labels), in this order.
+MATERIAL_NAMES = {"soft": "soft", "hard": "hard", "sine": "actuated (sine)",
+                  "neg_sine": "actuated (-sine)", "filled": "filled"}  # fmt: skip
+
+
+def _legend(labels: np.ndarray, phased: bool) -> list[tuple[str, tuple[float, ...]]]:
+    """(name, colour) of each material the robot's drawn faces show, for the picture's legend;
+    a co-designed robot's actuated voxels are one entry, their hue being their phase."""
+    present = set(np.asarray(labels).tolist())
+    entries = []
+    for label, name in MATERIAL_NAMES.items():
+        if label not in present:
+            continue
+        if phased and label in ACTUATED_LABELS:
+            if label == "sine" or "sine" not in present:
+                entries.append(("actuated (hue: phase)", (0.85, 0.55, 0.4)))
+            continue
+        entries.append((name, tuple(c / 255 for c in COLOURS[label])))
+    return entries
 
 
 def _draw(scene: _Scene, ax: Any, positions: np.ndarray, clock: str | None) -> None:
@@ -138,6 +162,13 @@ def _draw(scene: _Scene, ax: Any, positions: np.ndarray, clock: str | None) -> N
     )
     if clock is not None:
         ax.text(0.03, 0.95, clock, transform=ax.transAxes, va="top", fontsize=8)
+    if scene.legend and clock is not None:  # a movie's frame (a thumbnail is too small)
+        from matplotlib.patches import Patch
+
+        handles = [Patch(facecolor=colour, edgecolor=(0, 0, 0, 0.35), label=name)
+                   for name, colour in scene.legend]  # fmt: skip
+        ax.legend(handles=handles, loc="lower right", fontsize=6, frameon=True, framealpha=0.8,
+                  handlelength=1.0, borderpad=0.4, labelspacing=0.3)  # fmt: skip
 
 
 def _ground(scene: _Scene, centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
