@@ -28,7 +28,7 @@ from softevo.api.coordinator import Coordinator
 from softevo.api.db import Database, alembic_config, current_revision
 from softevo.api.events import TooManyClientsError, Watches
 from softevo.api.read_token import ReadTokenMiddleware
-from softevo.api.routes import archive, meta, runs, sweeps, views
+from softevo.api.routes import archive, front, meta, runs, sweeps, views
 from softevo.api.settings import Settings, get_settings
 from softevo.api.validation import RequestError, point_to_sim
 from softevo.core.evaluator import Evaluator
@@ -127,6 +127,7 @@ def create_app(
     _install_middleware(app, settings)
     app.include_router(runs.router)
     app.include_router(archive.router)
+    app.include_router(front.router)
     app.include_router(views.router)
     app.include_router(sweeps.router)
     app.include_router(meta.router)

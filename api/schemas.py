@@ -14,6 +14,7 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, StrictInt, c
 
 from softevo.core.config import PAPER_NINE_SHAPES, parse_shape
 from softevo.core.ga.algorithm import GAConfig
+from softevo.core.ga.vectors import MAX_OBJECTIVES
 from softevo.core.limits import MAX_SIDE
 from softevo.core.objectives import Objective
 from softevo.core.settings import SimSettings
@@ -58,7 +59,7 @@ class _RunSettings(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     preset: str = Field("paper-voxel", description="preset whose settings the others override")
-    encoding: Literal["voxel", "voxel-phase", "cube-springs", "spring"] | None = None
+    encoding: Literal["voxel", "voxel-phase", "cube-springs", "spring", "cppn"] | None = None
     sim: SimOverrides | None = Field(  # type: ignore[valid-type]
         None,
         description="simulation settings to override; `terrain` takes an object such as "
@@ -84,6 +85,27 @@ def _optional(info: Any) -> Any:
 
 #: Every GA setting, optional (None: the preset's value), with its bounds in the schema.
 _GA_FIELDS: dict[str, Any] = {name: _optional(info) for name, info in GAConfig.model_fields.items()}
+
+
+class ObjectiveIn(BaseModel):
+    """One objective in the object form; the run stores it with its reference filled in."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    measure: str = Field(description="a measure of the simulation's record (docs/physics.md)")
+    goal: Literal["max", "min"] = "max"
+    reference: float | None = Field(
+        None,
+        description="hypervolume reference in the measure's units (default: docs/evolution.md)",
+    )
+
+
+_GA_FIELDS["objectives"] = (
+    list[str | ObjectiveIn] | None,
+    Field(
+        None, max_length=MAX_OBJECTIVES, description=GAConfig.model_fields["objectives"].description
+    ),
+)
 RunSettings = create_model("RunSettings", __base__=_RunSettings, **_GA_FIELDS)
 
 
@@ -299,3 +321,25 @@ class ArchivePublic(BaseModel):
     coverage: float
     qd_score: float
     cells: list[ArchiveCell]
+
+
+class FrontPoint(BaseModel):
+    generation: int
+    index: int
+    id: int = Field(description="generation * population + index, for /individuals/{id}")
+    fitness: float | None
+    operator: str
+    measures: dict[str, float | None] = Field(description="its record of measures")
+    robot: dict[str, Any] | None = Field(None, description="its robot file, with ?robots=true")
+
+
+class FrontPublic(BaseModel):
+    run_id: int
+    generations: int = Field(description="committed generations the front has seen")
+    objectives: list[dict[str, Any]] = Field(
+        description="the run's objectives: measure, goal, hypervolume reference"
+    )
+    points: list[FrontPoint] = Field(
+        description="the non-dominated set of every individual evaluated so far, each genome "
+        "once (where it first appeared), in (generation, index) order"
+    )

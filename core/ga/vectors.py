@@ -74,10 +74,12 @@ def _spec(item: Any, position: int) -> ObjectiveSpec:
     measure = item.get("measure")
     if measure not in MEASURES:
         raise ValueError(f"{where}: unknown measure {measure!r} (measures: {', '.join(MEASURES)})")
-    goal = item.get("goal", "max")
+    goal = item.get("goal") or "max"
     if goal not in ("max", "min"):
         raise ValueError(f"{where}: goal must be 'max' or 'min', got {goal!r}")
-    reference = item.get("reference", MEASURES[measure][2])
+    reference = item.get("reference")
+    if reference is None:  # absent or null: the measure's default
+        reference = MEASURES[measure][2]
     if reference is None:
         raise ValueError(f"{where}: {measure} has no default reference point, give `reference`")
     if isinstance(reference, bool) or not isinstance(reference, int | float):

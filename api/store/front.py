@@ -1,0 +1,54 @@
+"""The reads of a run's Pareto front: every evaluated individual's measures, and the genomes of
+the few on the front."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from sqlalchemy import select, tuple_
+
+from softevo.api.db import Database
+from softevo.api.models import Individual
+from softevo.core.status import IndividualStatus
+
+
+def evaluated(db: Database, run_id: int) -> list[dict[str, Any]]:
+    """Every evaluated individual of the run (simulated or from the cache), each genome once at
+    its first appearance, in (generation, index) order; never a genome."""
+    seen: set[str] = set()
+    rows: list[dict[str, Any]] = []
+    with db.read() as session:
+        result = session.execute(
+            select(
+                Individual.generation, Individual.index, Individual.fitness,
+                Individual.operator, Individual.measures, Individual.genome_hash,
+            )
+            .where(
+                Individual.run_id == run_id,
+                Individual.status.in_(
+                    [IndividualStatus.EVALUATED.value, IndividualStatus.CACHED.value]
+                ),
+            )
+            .order_by(Individual.generation, Individual.index)
+        )  # fmt: skip
+        for generation, index, fitness, operator, measures, genome_hash in result:
+            if genome_hash in seen:
+                continue
+            seen.add(genome_hash)
+            rows.append({"generation": generation, "index": index, "fitness": fitness,
+                         "operator": operator, "measures": measures or {}})  # fmt: skip
+    return rows
+
+
+def genomes(db: Database, run_id: int, where: list[tuple[int, int]]) -> dict[tuple[int, int], Any]:
+    """The genomes (stored JSON) of the individuals at these (generation, index)."""
+    if not where:
+        return {}
+    with db.read() as session:
+        result = session.execute(
+            select(Individual.generation, Individual.index, Individual.genome).where(
+                Individual.run_id == run_id,
+                tuple_(Individual.generation, Individual.index).in_(where),
+            )
+        )
+        return {(g, i): genome for g, i, genome in result}

@@ -1,0 +1,49 @@
+"""`GET /runs/{id}/front` (issue 36): the points are mutually non-dominated and every other
+evaluated individual is dominated by, or equal to, one of them; `objectives` refused in one
+line naming the field."""
+
+from __future__ import annotations
+
+import numpy as np
+from fastapi.testclient import TestClient
+
+from softevo.core.config import resolve
+from softevo.core.front import front_values
+from softevo.core.ga import pareto
+from tests.api.test_api import wait_for
+
+RUN = {"preset": "quick", "seed": 2, "shape": [2, 2, 2], "population": 6, "generations": 3,
+       "sim": {"duration": 1.0}, "algorithm": "nsga2",
+       "objectives": ["speed", "-cost_of_transport"]}  # fmt: skip
+
+
+def test_the_front_dominates_every_other_individual(client: TestClient) -> None:
+    run_id = client.post("/runs", json=RUN).json()["id"]
+    wait_for(client, run_id, ("completed",))
+    front = client.get(f"/runs/{run_id}/front").json()
+    assert front["objectives"][1] == {"measure": "cost_of_transport", "goal": "min",
+                                      "reference": 100_000.0}  # fmt: skip
+    specs = resolve(RUN).objectives
+    points = front_values(specs, front["points"])
+    assert len(points) >= 1 and not np.isnan(points).any()
+    for point in points:
+        assert not any(pareto.dominates(other, point) for other in points)
+    listed = client.get(f"/runs/{run_id}/individuals", params={"limit": 1000}).json()["items"]
+    everyone = front_values(specs, [i for i in listed if i["fitness"] is not None])
+    for point in everyone[~np.isnan(everyone).any(axis=1)]:
+        assert any(pareto.dominates(f, point) or (f == point).all() for f in points)
+    curve = client.get(f"/runs/{run_id}/curve").json()["generations"]
+    assert len(curve) == 3
+    robots = client.get(f"/runs/{run_id}/front", params={"robots": True}).json()["points"]
+    assert all(point["robot"]["format"] == "softevo.robot/1" for point in robots)
+    assert all(point["measures"]["cost_of_transport"] is not None for point in robots)
+
+
+def test_a_run_without_objectives_has_no_front_and_bad_ones_are_named(
+    client: TestClient,
+) -> None:
+    plain = client.post("/runs", json={**RUN, "objectives": [], "generations": 1}).json()["id"]
+    assert client.get(f"/runs/{plain}/front").status_code == 404
+    response = client.post("/runs", json={**RUN, "objectives": ["speed", "sped"]})
+    assert response.status_code == 422
+    assert "objectives: item 1: unknown measure 'sped'" in response.text
