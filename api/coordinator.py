@@ -201,10 +201,12 @@ class RunDriver(Hooks):
     def _commit(self, step: Step, upcoming: list[Individual]) -> None:
         """The generation's fitness, statistics, GA state and counters and the next generation's
         members, all or nothing."""
-        best = step.state.best
+        best, archive = step.state.best, step.state.archive
         commit = GenerationCommit(
             stats=step.stats.to_json(),
-            state=EncodedJSON(step.state.to_text(history=False)),  # the curve: in `generations`
+            # the curve is in `generations`, the archive in a column of its own
+            state=EncodedJSON(step.state.to_text(history=False, archive=False)),
+            archive=None if archive is None else EncodedJSON(archive.to_text()),
             cached={
                 index: value
                 for index, value in enumerate(step.fitness.tolist())

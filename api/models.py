@@ -67,6 +67,9 @@ class Run(Base):
     seed: Mapped[int] = mapped_column(BigInteger().with_variant(Integer, "sqlite"))
     config: Mapped[dict[str, Any]] = mapped_column(JSON)
     ga_state: Mapped[dict[str, Any] | None] = mapped_column(JSON)
+    #: a quality-diversity run's archive (`Archive.to_json()`) as of its last committed
+    #: generation, kept apart from the GA state so `GET /runs/{id}/archive` reads it alone
+    archive: Mapped[dict[str, Any] | None] = mapped_column(JSON)
     generations_done: Mapped[int] = mapped_column(Integer, default=0)
     generations_total: Mapped[int] = mapped_column(Integer)
     evaluations: Mapped[int] = mapped_column(Integer, default=0)

@@ -56,10 +56,15 @@ def _fence(connection: Connection, run_id: int, lease: Lease) -> None:
 
 
 def load(db: Database, run_id: int) -> tuple[dict[str, Any], dict[str, Any] | None]:
-    """The run's config and the GA state stored with its last committed generation."""
+    """The run's config and the GA state stored with its last committed generation, its
+    archive (kept in a column of its own) put back in."""
     with db.read() as session:
-        row = session.execute(select(Run.config, Run.ga_state).where(Run.id == run_id)).one()
-        return row.config, row.ga_state
+        row = session.execute(
+            select(Run.config, Run.ga_state, Run.archive).where(Run.id == run_id)
+        ).one()
+        if row.ga_state is None or row.archive is None:
+            return row.config, row.ga_state
+        return row.config, {**row.ga_state, "archive": row.archive}
 
 
 def known_fitness(
@@ -163,6 +168,7 @@ class GenerationCommit:
 
     stats: dict[str, Any]
     state: dict[str, Any] | EncodedJSON
+    archive: dict[str, Any] | EncodedJSON | None = None  # a quality-diversity run's, apart
     cached: dict[int, float] = field(default_factory=dict)
     cached_measures: Mapping[int, Mapping[str, float]] = field(default_factory=dict)  # of `cached`
     landed: Sequence[Landed] = ()
@@ -256,6 +262,7 @@ _ADVANCE_STATEMENT = (
     .where(RUNS.c.id == bindparam("b_run"))
     .values(
         ga_state=bindparam("b_state", type_=RUNS.c.ga_state.type),
+        archive=bindparam("b_archive", type_=RUNS.c.archive.type),
         generations_done=bindparam("b_done"),
         evaluations=RUNS.c.evaluations + bindparam("b_evaluations"),
         saved=RUNS.c.saved + bindparam("b_saved"),
@@ -304,6 +311,7 @@ def commit_generation(db: Database, run_id: int, lease: Lease, commit: Generatio
         advance = {
             "b_run": run_id,
             "b_state": commit.state,
+            "b_archive": commit.archive,
             "b_done": generation + 1,
             "b_evaluations": stats["evaluations"],
             "b_saved": stats["saved"],

@@ -81,8 +81,9 @@ class RunRecord:
     takeovers: int
 
 
-#: Runs as reads see them: never the GA state (two populations of JSON, only the coordinator's).
-_RUNS = select(Run).options(defer(Run.ga_state, raiseload=True))
+#: Runs as reads see them: never the GA state (two populations of JSON, only the coordinator's)
+#: nor the archive (read alone by `archive`).
+_RUNS = select(Run).options(defer(Run.ga_state, raiseload=True), defer(Run.archive, raiseload=True))
 
 
 def _record(row: Run) -> RunRecord:
@@ -335,8 +336,8 @@ def best_individual(db: Database, run: RunRecord) -> dict[str, Any] | None:
 
 
 def archive(db: Database, run_id: int) -> dict[str, Any] | None:
-    """The run's quality-diversity archive as of its last committed generation (the GA state's,
-    `softevo.core.ga.archive.Archive.to_json()`); None before the first commit."""
+    """The run's quality-diversity archive as of its last committed generation
+    (`softevo.core.ga.archive.Archive.to_json()`), from its own column, never the GA state;
+    None before the first commit."""
     with db.read() as session:
-        state = session.scalar(select(Run.ga_state).where(Run.id == run_id))
-    return None if state is None else state.get("archive")
+        return session.scalar(select(Run.archive).where(Run.id == run_id))

@@ -83,11 +83,12 @@ class GAState:
             "history": [stats.to_json() for stats in self.history] if history else [],
         }
 
-    def to_text(self, history: bool = True) -> str:
+    def to_text(self, history: bool = True, archive: bool = True) -> str:
         """`to_json` as JSON text (its keys in another order), written every generation by the
         service: each genome enters as its canonical text, computed once for its hash, instead of
         being encoded again (encoding a population's genes cost more than the rest of a
-        generation's commit)."""
+        generation's commit). Without `archive` (the service keeps it in a column of its own,
+        which `GET /runs/{id}/archive` reads without the rest), the archive is left out."""
         plain = {
             "seed": self.seed,
             "generation": self.generation,
@@ -106,7 +107,7 @@ class GAState:
             parts.append(
                 f', "best": {with_genome({"fitness": fitness, "generation": generation}, genome)}'
             )
-        if self.archive is not None:
+        if self.archive is not None and archive:
             parts.append(f', "archive": {self.archive.to_text()}')
         if self.data is not None:
             parts.append(f', "data": {json.dumps(self.data)}')
