@@ -2,6 +2,7 @@
 import * as THREE from "three";
 import { OrbitControls } from "three/addons/OrbitControls.js";
 import { api, fmt, h, softevo, terrainText } from "./api.js";
+import { costOfTransportText, energyText } from "./units.js";
 import { voxelMesh } from "./voxels.js";
 
 const PASSIVE_SOFT = new THREE.Color("#9bc59d"), PASSIVE_HARD = new THREE.Color("#4a4f55");
@@ -68,7 +69,7 @@ export class Replay {
     const measures = data.measures || {};
     const terrain = terrainText({ sim: { terrain: data.terrain } });
     const facts = h("p", { class: "muted", id: "replay-measures" }, `terrain: ${terrain} · forward ${fmt(measures.forward_speed)} m/s · climb ${fmt(measures.climb_rate)} m/s`
-      + (measures.energy !== null && measures.energy !== undefined ? ` · actuator work ${fmt(measures.energy)} J · cost of transport ${fmt(measures.cost_of_transport)}` : ""));
+      + (measures.energy !== null && measures.energy !== undefined ? ` · actuator work ${energyText(measures.energy)} · cost of transport ${costOfTransportText(measures.cost_of_transport)}` : ""));
     const holder = h("div", { id: "replay-canvas" });
     const play = h("button", { id: "replay-play" }, "Pause");
     const slider = h("input", { type: "range", min: 0, max: data.frames.length - 1, value: 0, id: "replay-slider" });
