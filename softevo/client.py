@@ -257,6 +257,12 @@ class Run:
         QD-score; each elite's robot file with `robots`); APIError 404 for a run without."""
         return self.client.get(f"/runs/{self.id}/archive", robots=str(robots).lower())
 
+    def front(self, robots: bool = False) -> dict[str, Any]:
+        """A run with objectives: its Pareto front so far (every non-dominated individual with
+        its measures, generation and index; each one's robot file with `robots`); APIError 404
+        for a run without."""
+        return self.client.get(f"/runs/{self.id}/front", robots=str(robots).lower())
+
     def cancel(self) -> dict[str, Any]:
         """Stop the run now, keeping its results; APIError 409 if it has already stopped."""
         self.data = self.client.post(f"/runs/{self.id}/cancel")

@@ -20,7 +20,8 @@ from typing import Any
 from softevo.core.config import ConfigError, RunConfig, resolve
 from softevo.core.evaluator import Evaluator
 from softevo.core.evolution import Evolution, Progress
-from softevo.core.nulls import to_null_record
+from softevo.core.front import front_rows
+from softevo.core.nulls import to_null, to_null_record
 from softevo.core.robot import Robot, build_mechanics, dropped_voxels
 from softevo.core.robot_file import RobotFileError, load_robot, parse_robot, robot_to_json, with_sim
 
@@ -58,6 +59,9 @@ class Result:
     wall_seconds: float  # simulating and breeding (not writing files), to the ms
     measures: dict[str, dict[str, float | None]] = field(default_factory=dict)
     best_measures: dict[str, float | None] | None = None
+    #: a run with objectives: its front, each genome on it once (genome_hash, fitness, measures),
+    #: by genome hash; empty for a run without
+    front: list[dict[str, Any]] = field(default_factory=list)
 
     @classmethod
     def of(cls, evolution: Evolution) -> Result:
@@ -79,6 +83,7 @@ class Result:
             wall_seconds=round(evolution.elapsed, 3),
             measures=measures,
             best_measures=None if best is None else measures.get(best_hash, {}),
+            front=_front(evolution, measures),
         )
 
     def to_json(self) -> dict[str, Any]:
@@ -96,6 +101,20 @@ class Result:
             "saved": self.saved,
             "wall_seconds": self.wall_seconds,
         }
+
+
+def _front(
+    evolution: Evolution, measures: dict[str, dict[str, float | None]]
+) -> list[dict[str, Any]]:
+    """The non-dominated set of every genome the run simulated, under its objectives."""
+    specs = evolution.config.objectives
+    if not specs:
+        return []
+    rows = [
+        {"genome_hash": key, "fitness": to_null(evolution.cache.get(key)), "measures": record}
+        for key, record in sorted(measures.items())
+    ]
+    return list(front_rows(specs, rows))
 
 
 class Run:

@@ -16,7 +16,7 @@ from softevo.core import figures
 from softevo.core.archive_figures import archive_figure
 from softevo.core.config import PRESET_DESCRIPTIONS, PRESETS, ConfigError, RunConfig, resolve
 from softevo.core.evolution import Evolution
-from softevo.core.front import front_figure
+from softevo.core.front_figure import front_figure
 from softevo.core.ga.descriptors import CATALOGUE
 from softevo.core.objectives import OBJECTIVES
 from softevo.library import Result, Run

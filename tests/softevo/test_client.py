@@ -74,6 +74,16 @@ def test_a_map_elites_runs_archive(client: Client) -> None:
     assert refused.value.status == 404 and "without descriptors" in refused.value.message
 
 
+def test_an_nsga2_runs_front(client: Client) -> None:
+    run = client.run(**TINY, algorithm="nsga2", objectives=["speed", "-cost_of_transport"],
+                     seed=2, sim=TINY_SIM)  # fmt: skip
+    assert run.wait(timeout=120)["status"] == "completed"
+    front = run.front(robots=True)
+    assert front["points"] and front["objectives"][1]["goal"] == "min"
+    assert all(point["robot"]["format"] == "softevo.robot/1" for point in front["points"])
+    assert all(point["measures"]["cost_of_transport"] is not None for point in front["points"])
+
+
 def test_cancel_and_a_wait_that_times_out(client: Client) -> None:
     run = client.run(**{**TINY, "generations": 500}, sim=TINY_SIM)
     with pytest.raises(TimeoutError, match=f"run {run.id}"):

@@ -33,8 +33,11 @@ def test_library_nsga2_run_measures_energy_and_curves_its_front() -> None:
     assert last["front_size"] == len(np.unique(values[pareto.nondominated_mask(values)], axis=0))
     assert last["hypervolume"] == pareto.hypervolume(values, reference_point(config.objectives))
     assert last["hypervolume"] > 0
+    front = front_values(config.objectives, result.front)
+    assert len(front) == last["front_size"]  # distinct genomes here, distinct points there
+    assert all(not pareto.dominates(a, b) for a in front for b in front)
     again = library.evolve(SMALL, algorithm="nsga2", objectives=OBJECTIVES, workers=2)
-    assert again.curve == result.curve  # any number of workers
+    assert again.curve == result.curve and again.front == result.front  # any number of workers
 
 
 def test_a_run_without_objectives_measures_no_energy_and_keeps_its_columns() -> None:
