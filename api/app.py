@@ -125,12 +125,8 @@ def create_app(
         redoc_url=None,  # ReDoc loads its script from a CDN
     )
     _install_middleware(app, settings)
-    app.include_router(runs.router)
-    app.include_router(archive.router)
-    app.include_router(front.router)
-    app.include_router(views.router)
-    app.include_router(sweeps.router)
-    app.include_router(meta.router)
+    for module in (runs, archive, front, views, sweeps, meta):
+        app.include_router(module.router)
     dashboard.install(app)
     _install_error_handlers(app)
     return app

@@ -107,6 +107,8 @@ class Generation(Base):
     seconds: Mapped[float] = mapped_column(Float)  # wall time of this generation's evaluation
     coverage: Mapped[float | None] = mapped_column(Float)  # runs with an archive (descriptors)
     qd_score: Mapped[float | None] = mapped_column(Float)
+    hypervolume: Mapped[float | None] = mapped_column(Float)  # runs with objectives
+    front_size: Mapped[int | None] = mapped_column(Integer)
     committed_at: Mapped[datetime] = mapped_column()
 
 

@@ -189,6 +189,10 @@ class CurveRow(BaseModel):
         None, description="runs with descriptors: filled fraction of the archive's cells"
     )
     qd_score: float | None = Field(None, description="and the sum of its elites' fitness")
+    hypervolume: float | None = Field(
+        None, description="with objectives: the hypervolume of the front so far (docs/evolution.md)"
+    )
+    front_size: int | None = Field(None, description="and its distinct points")
 
 
 class Curve(BaseModel):

@@ -74,15 +74,29 @@ def add_parser(commands: Any) -> None:
         help="fitness: " + "; ".join(f"{k}: {v[0]} ({v[1]})" for k, v in OBJECTIVES.items()),
     )  # fmt: skip
     run.add_argument(
-        "--objectives", type=_names, metavar="A,-B",
-        help="several objectives at once, measures of the simulation (a leading - minimises), "
-        "e.g. speed,-cost_of_transport, with --algorithm nsga2 or afpo: adds hypervolume and "
-        "front_size to the curve, writes front.csv and front.png (docs/evolution.md)",
-    )  # fmt: skip
-    run.add_argument(
         "--terrain", type=terrain_json, metavar="JSON",
         help=f"the ground: {TERRAIN_EXAMPLES}; the task-* presets come with theirs",
     )  # fmt: skip
+    _search_arguments(run)
+    run.add_argument(
+        "--workers", type=int, metavar="W", help="processes (default: one per core; 1 = serial)"
+    )
+    run.add_argument(
+        "--out", metavar="DIR",
+        help="output folder (softevo-runs/PRESET-SHAPE-seedN-HASH); one holding another "
+        "config's results is refused",
+    )  # fmt: skip
+    run.add_argument(
+        "--resume", metavar="DIR",
+        help="go on with the stopped run in DIR (its config.json, state.json, cache.json), "
+        "writing there; only --generations, --workers and --json may be given with it",
+    )  # fmt: skip
+    run.add_argument("--json", action="store_true", help="print the result as JSON at the end")
+    run.set_defaults(handler=run_command)
+
+
+def _search_arguments(run: argparse.ArgumentParser) -> None:
+    """The search strategy's flags: algorithm, its options, MAP-Elites' map, the objectives."""
     run.add_argument(
         "--algorithm", metavar="NAME",
         help="the search strategy: ga (the preset's), random or hillclimb (baselines), "
@@ -108,20 +122,11 @@ def add_parser(commands: Any) -> None:
         help="cells along each descriptor, e.g. 10,10 (default: 8 each)",
     )
     run.add_argument(
-        "--workers", type=int, metavar="W", help="processes (default: one per core; 1 = serial)"
-    )
-    run.add_argument(
-        "--out", metavar="DIR",
-        help="output folder (softevo-runs/PRESET-SHAPE-seedN-HASH); one holding another "
-        "config's results is refused",
+        "--objectives", type=_names, metavar="A,-B",
+        help="several objectives at once, measures of the simulation (a leading - minimises), "
+        "e.g. speed,-cost_of_transport, with --algorithm nsga2 or afpo: adds hypervolume and "
+        "front_size to the curve, writes front.csv and front.png (docs/evolution.md)",
     )  # fmt: skip
-    run.add_argument(
-        "--resume", metavar="DIR",
-        help="go on with the stopped run in DIR (its config.json, state.json, cache.json), "
-        "writing there; only --generations, --workers and --json may be given with it",
-    )  # fmt: skip
-    run.add_argument("--json", action="store_true", help="print the result as JSON at the end")
-    run.set_defaults(handler=run_command)
 
 
 def _request(args: argparse.Namespace) -> dict[str, Any]:

@@ -29,7 +29,7 @@ from softevo.api.schemas import (
 )
 from softevo.api.validation import run_config
 from softevo.core.config import RunConfig
-from softevo.core.ga.stats import CURVE_COLUMNS, QD_COLUMNS
+from softevo.core.ga.stats import curve_columns
 from softevo.core.genome import Genome
 from softevo.core.robot_file import robot_to_json
 from softevo.core.status import IndividualStatus, RunStatus
@@ -147,7 +147,8 @@ def cancel_run(run_id: RunId, db: DatabaseDep, coordinator: CoordinatorDep) -> R
 
 
 def _csv(rows: list[dict[str, Any]]) -> str:
-    columns = CURVE_COLUMNS + (QD_COLUMNS if rows and "coverage" in rows[0] else ())
+    first = rows[0] if rows else {}
+    columns = curve_columns("coverage" in first, "front_size" in first)
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(columns)
@@ -159,7 +160,7 @@ def _csv(rows: list[dict[str, Any]]) -> str:
 @router.get(
     "/{run_id}/curve",
     responses={**NOT_FOUND, 200: {"content": {"text/csv": {}}}},
-    response_model_exclude_unset=True,  # coverage and qd_score only for runs with an archive
+    response_model_exclude_unset=True,  # coverage, qd_score, hypervolume, front_size: some runs
 )
 def get_curve(
     run_id: RunId,
@@ -167,7 +168,8 @@ def get_curve(
     format: Annotated[Literal["json", "csv"], Query()] = "json",
 ) -> Any:
     """One row per committed generation: best, mean, median, min, best so far, diversity, ...
-    (and coverage, qd_score for a run with descriptors)."""
+    (and coverage, qd_score for a run with descriptors; hypervolume, front_size for a run with
+    objectives)."""
     store.get_run(db, run_id)
     rows = store.curve(db, run_id)
     if format == "csv":

@@ -283,7 +283,8 @@ _INSERT_GENERATION = DriverStatement(
     .inline()
     .values(
         run_id=bindparam("b_run"), coverage=bindparam("b_coverage"),
-        qd_score=bindparam("b_qd_score"), seconds=bindparam("b_seconds"),
+        qd_score=bindparam("b_qd_score"), hypervolume=bindparam("b_hypervolume"),
+        front_size=bindparam("b_front_size"), seconds=bindparam("b_seconds"),
         committed_at=bindparam("b_at"), **{key: bindparam(f"b_{key}") for key in CURVE_FIELDS},
     )
 )  # fmt: skip
@@ -306,6 +307,7 @@ def commit_generation(db: Database, run_id: int, lease: Lease, commit: Generatio
             connection,
             [{"b_run": run_id, **{f"b_{key}": stats[key] for key in CURVE_FIELDS},
               "b_coverage": stats.get("coverage"), "b_qd_score": stats.get("qd_score"),
+              "b_hypervolume": stats.get("hypervolume"), "b_front_size": stats.get("front_size"),
               "b_seconds": commit.seconds, "b_at": at}],
         )  # fmt: skip
         advance = {

@@ -179,10 +179,13 @@ def curve(db: Database, run_id: int) -> list[dict[str, Any]]:
 
 
 def _curve_row(row: Generation) -> dict[str, Any]:
-    """The row of `CURVE_COLUMNS`, and `QD_COLUMNS` for a run with an archive."""
+    """The row of `CURVE_COLUMNS`, `QD_COLUMNS` for a run with an archive and
+    `PARETO_COLUMNS` for one with objectives."""
     data = {column: getattr(row, column) for column in CURVE_COLUMNS}
     if row.coverage is not None:
         data.update(coverage=row.coverage, qd_score=row.qd_score)
+    if row.front_size is not None:
+        data.update(hypervolume=row.hypervolume, front_size=row.front_size)
     return data
 
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 from fastapi.testclient import TestClient
 
+from softevo import library
 from softevo.core.config import resolve
 from softevo.core.front import front_values
 from softevo.core.ga import pareto
@@ -33,7 +34,10 @@ def test_the_front_dominates_every_other_individual(client: TestClient) -> None:
     for point in everyone[~np.isnan(everyone).any(axis=1)]:
         assert any(pareto.dominates(f, point) or (f == point).all() for f in points)
     curve = client.get(f"/runs/{run_id}/curve").json()["generations"]
-    assert len(curve) == 3
+    assert curve == library.evolve(RUN, workers=1).curve  # the service's run is the library's
+    assert curve[-1]["hypervolume"] > 0 and curve[-1]["front_size"] >= 1
+    csv = client.get(f"/runs/{run_id}/curve", params={"format": "csv"}).text
+    assert csv.splitlines()[0].endswith(",hypervolume,front_size")
     robots = client.get(f"/runs/{run_id}/front", params={"robots": True}).json()["points"]
     assert all(point["robot"]["format"] == "softevo.robot/1" for point in robots)
     assert all(point["measures"]["cost_of_transport"] is not None for point in robots)
