@@ -59,7 +59,9 @@ def run_cost(config: RunConfig) -> Cost:
     descriptors an archive with as many elites as it has cells (or individuals, if fewer)."""
     individuals = config.population * config.generations
     encoding = config.make_encoding()
-    genome_bytes = 2 * len(encoding.alphabet) + 20 * len(encoding.real_bounds) + 60
+    genome_bytes = getattr(encoding, "genome_bytes", None) or (
+        2 * len(encoding.alphabet) + 20 * len(encoding.real_bounds) + 60
+    )  # an encoding of variable length (cppn) says what a genome of it may take
     elites = min(math.prod(config.bins), individuals) if config.descriptors else 0
     elite_bytes = ELITE_BYTES + ELITE_DESCRIPTOR_BYTES * len(config.descriptors) + genome_bytes
     simulations = float(box_springs(config.shape)) * config.sim.n_steps * individuals

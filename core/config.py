@@ -54,7 +54,7 @@ class RunConfig(GAConfig):
     """Everything that defines a run: encoding, bounding box, seed, GA and simulation settings."""
 
     preset: str | None = None
-    encoding: Literal["voxel", "voxel-phase", "cube-springs", "spring"] = "voxel"
+    encoding: Literal["voxel", "voxel-phase", "cube-springs", "spring", "cppn"] = "voxel"
     shape: tuple[int, int, int] = (4, 4, 4)
     seed: int = Field(0, ge=0, le=2**63 - 1)
     sim: SimSettings = Field(default_factory=SimSettings)
@@ -84,10 +84,10 @@ class RunConfig(GAConfig):
             )
         if self.encoding == "cube-springs" and len(self.cube_options) < 2:
             raise ValueError("cube_options: at least two options are needed to evolve")
-        if self.descriptors and self.encoding not in ("voxel", "voxel-phase"):
+        if self.descriptors and self.encoding not in ("voxel", "voxel-phase", "cppn"):
             raise ValueError(
-                f"descriptors: defined on voxel labels, so only for the voxel encodings, not "
-                f"{self.encoding}"
+                f"descriptors: defined on voxel labels, so only for the voxel encodings and "
+                f"cppn, not {self.encoding}"
             )
         omegas = {w for _, b, w, _ in self.cube_options if b != 0}
         if self.encoding == "cube-springs" and len(omegas) > 1:
@@ -161,6 +161,13 @@ PRESETS["map-elites"] = {
     "bins": [8, 8],
 }  # fmt: skip
 
+#: CPPN bodies in a big box: the paper's GA with NEAT variation (every copy mutated, half the
+#: crossed children), 25 x 40 generations (docs/evolution.md).
+PRESETS["cppn-8x8x8"] = {
+    **_PAPER_VOXEL, "encoding": "cppn", "shape": [8, 8, 8], "generations": 40,
+    "mutation_probability": 0.5,
+}  # fmt: skip
+
 PRESET_DESCRIPTIONS = {
     "paper-cube": "paper phase 2: one cube, 28 springs pick one of 4 [k,b,w,c] options",
     "paper-voxel": "paper phase 3: voxel robots in a bounding box (4x4x4 by default)",
@@ -171,6 +178,8 @@ PRESET_DESCRIPTIONS = {
     "lean, not a gait's (its seed-1 best: 0.223 m/s over 3 s, 0.070 m/s over 5 s)",
     "map-elites": "paper-voxel as MAP-Elites: the best robot of every cell of filled x actuated "
     "fraction (8 x 8), parents drawn from the archive (docs/evolution.md)",
+    "cppn-8x8x8": "a CPPN grows 8x8x8 crawlers (bodies, phases and amplitudes), the paper's "
+    "GA with NEAT variation, 25 x 40 generations (docs/evolution.md)",
     **{name: f"paper-voxel task: {asks}" for name, (asks, _, _) in TASKS.items()},
 }
 

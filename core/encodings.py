@@ -9,6 +9,8 @@
 * `spring` (beyond the paper, its stated future work): which voxels are filled, plus one material
   label (soft, hard, sine, neg_sine) for every spring of the bounding-box lattice, and a, b, c.
   Modules are single springs, not whole cubes.
+* `cppn` (the field's indirect encoding): a network queried at every voxel, decoded into a
+  `voxel-phase` robot; its genes and NEAT variation live in `softevo.core.cppn`.
 
 Every encoding exposes its genes to the operators as *segments*: runs of discrete genes with an
 alphabet size each (crossover cuts each segment separately, so the occupancy of the `spring`
@@ -115,6 +117,15 @@ class Encoding(ABC):
             part = discrete[segment.start : segment.stop]
             if len(part) and (min(part) < 0 or max(part) >= segment.alphabet):
                 raise EncodingError(f"{self.name} genome has a discrete gene out of its alphabet")
+
+    def labels(self, genome: Genome) -> tuple[int, ...]:
+        """Label index of every voxel of the genome's body (what the descriptors read): the
+        voxel encodings' discrete genes themselves."""
+        return genome.discrete
+
+    def real_bounds_of(self, genome: Genome) -> np.ndarray:
+        """Bounds of `genome`'s real genes (an encoding of variable length says per genome)."""
+        return self.real_bounds
 
     @abstractmethod
     def to_robot(self, genome: Genome, sim: SimSettings) -> Robot:
@@ -274,4 +285,10 @@ def make_encoding(
         return SpringEncoding(shape)
     if name == "cube-springs":
         return CubeSpringsEncoding(cube_options)
-    raise EncodingError(f"unknown encoding {name!r} (voxel, voxel-phase, cube-springs, spring)")
+    if name == "cppn":
+        from softevo.core.cppn import CppnEncoding  # it builds on this module
+
+        return CppnEncoding(shape)
+    raise EncodingError(
+        f"unknown encoding {name!r} (voxel, voxel-phase, cube-springs, spring, cppn)"
+    )

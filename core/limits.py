@@ -9,8 +9,10 @@ MAX_SIDE = 32
 MAX_VOXELS = 4096
 #: Largest robot file read (bytes).
 MAX_FILE_BYTES = 8 * 1024 * 1024
-#: The service's default ceiling on one run's voxels (SOFTEVO_MAX_VOXELS; at most MAX_VOXELS).
-SERVICE_MAX_VOXELS = 512
+#: The service's default ceiling on one run's voxels (SOFTEVO_MAX_VOXELS; at most MAX_VOXELS):
+#: a 10x10x10 box, what the `cppn` encoding grows bodies in (512, an 8x8x8 box, until issue 38);
+#: what a run may simulate in it is bounded by the cost budget (`softevo.api.cost`).
+SERVICE_MAX_VOXELS = 1000
 #: Robots per evaluator call in the service by default (SOFTEVO_BATCH_SIZE); the local pool cuts
 #: no chunk smaller than this.
 BATCH_SIZE = 4

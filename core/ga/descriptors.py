@@ -9,7 +9,8 @@ of the robot's filled voxels (what `softevo.core.lattice` builds; cut-off voxels
 * `soft`: soft fraction of the filled voxels, in [0, 1];
 * `height`: vertical extent of the body relative to the box's height, in [0, 1].
 
-They need voxel labels, so they are defined for the voxel encodings (`voxel`, `voxel-phase`).
+They need voxel labels, so they are defined for the voxel encodings (`voxel`, `voxel-phase`)
+and for `cppn` (the labels of its decoded body).
 
 One is behavioural, measured by the simulation rather than read from the body:
 

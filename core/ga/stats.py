@@ -86,6 +86,10 @@ def diversity(genomes: list[Genome]) -> float:
     """Mean pairwise normalised Hamming distance of the discrete genes (0 for fewer than 2)."""
     if len(genomes) < 2 or not genomes[0].discrete:
         return 0.0
+    if genomes[0].encoding == "cppn":  # networks of different sizes: their connections differ
+        from softevo.core.cppn import network_diversity
+
+        return network_diversity(genomes)
     genes = np.array([g.discrete for g in genomes], dtype=np.int64)
     n, length = genes.shape
     # pairs that differ at a position, from how often each value occurs there: n^2 - sum(c^2)

@@ -160,7 +160,8 @@ class Strategy(ABC):
         measured = zip(individuals, fitness, records, strict=True)
         for index, (individual, value, record) in enumerate(measured):
             if math.isfinite(value):
-                values = describe(config.descriptors, individual.genome.discrete, box, record)
+                labels = self.encoding.labels(individual.genome)
+                values = describe(config.descriptors, labels, box, record)
                 archive.add(values, float(value), state.generation, index, individual.genome)
         return archive
 

@@ -24,7 +24,11 @@ def mate(
 ) -> list[Individual]:
     """Two children of `pair`: with probability `crossover_probability` a two-point crossover
     of each gene segment (a voxel's own real genes cut with its label), else copies; each then
-    mutated with probability `mutation_probability`. Parents are named by `indices`."""
+    mutated with probability `mutation_probability`. Parents are named by `indices`. An
+    encoding that brings its own operators (`cppn`: NEAT) breeds its children itself."""
+    own = getattr(encoding, "mate", None)
+    if own is not None:
+        return own(config, pair, indices, rng)
     first, second = pair
     a, b = np.array(first.genome.discrete), np.array(second.genome.discrete)
     ra, rb = np.array(first.genome.real), np.array(second.genome.real)
@@ -57,7 +61,11 @@ def mate(
 def mutant(
     config: GAConfig, encoding: Encoding, parent: Individual, index: int, rng: np.random.Generator
 ) -> Individual:
-    """A mutated copy of `parent` (at least one discrete gene redrawn, real genes stepped)."""
+    """A mutated copy of `parent` (at least one discrete gene redrawn, real genes stepped; an
+    encoding that brings its own operators mutates it itself)."""
+    own = getattr(encoding, "mutate", None)
+    if own is not None:
+        return own(config, parent, index, rng)
     genome = parent.genome
     discrete = operators.mutate_discrete(
         np.array(genome.discrete), encoding.alphabet, max(1, config.mutation_genes), rng

@@ -215,7 +215,7 @@ def test_runs_beyond_the_bound_wait_queued(make_client: Callable[..., TestClient
         ({"population": 1}, ["body", "population"]),
         ({"population": 5000}, ["body", "population"]),
         ({"generations": 10**6}, ["body", "generations"]),
-        ({"shape": [9, 9, 9]}, ["body", "shape"]),
+        ({"shape": [11, 10, 10]}, ["body", "shape"]),
         ({"shape": [0, 3, 3]}, ["body", "shape"]),
         ({"sim": {"duration": 1000.0}}, ["body", "sim", "duration"]),
         ({"sim": {"dt": 1e-6}}, ["body", "sim", "dt"]),
@@ -321,7 +321,7 @@ def test_sweep_over_boxes_and_seeds(client: TestClient) -> None:
 
 
 def test_sweep_with_one_bad_box_queues_nothing(client: TestClient) -> None:
-    response = client.post("/sweeps", json={"preset": "quick", "shapes": [[2, 2, 2], [9, 9, 9]]})
+    response = client.post("/sweeps", json={"preset": "quick", "shapes": [[2, 2, 2], [11, 10, 10]]})
     assert response.status_code == 422
     assert response.json()["detail"][0]["loc"][:3] == ["body", "shapes", "1"]
     assert client.get("/runs").json()["total"] == 0
