@@ -199,7 +199,8 @@ def _check_genome(encoding: Encoding, genome: Genome, where: str) -> None:
         encoding.check(genome)
     except EncodingError as error:
         raise ResumeError(f"{where}: {error} (another run's genome?)") from None
-    for value, (low, high) in zip(genome.real, encoding.real_bounds_of(genome).tolist(), strict=True):
+    bounds = encoding.real_bounds_of(genome).tolist()
+    for value, (low, high) in zip(genome.real, bounds, strict=True):
         if not low <= value <= high:
             raise ResumeError(f"{where}.real: {value!r} is outside its bounds [{low:g}, {high:g}]")
 
