@@ -212,6 +212,9 @@ def resolve(request: dict[str, Any]) -> RunConfig:
             f'{{"sim": {{"{name}": ...}}}} (sim.{name})'
         )
     merged = {**PRESETS[preset], **request, "preset": preset}
+    if merged.get("algorithm", "ga") != PRESETS[preset].get("algorithm", "ga"):
+        if "options" not in request:  # the preset's options are its algorithm's
+            merged.pop("options", None)
     _default_map(merged, request)
     sim_overrides = request.get("sim", {})
     if not isinstance(sim_overrides, dict):

@@ -1,14 +1,27 @@
 """`map-elites`: quality-diversity. Parents are drawn from an archive that keeps the fittest
 robot of every cell of `descriptors` x `bins` (`softevo.core.ga.archive`), so the run keeps the
-best of every kind of body instead of one kind."""
+best of every kind of body instead of one kind.
+
+How children are made is this strategy's own `options` (`MapElitesOptions`): by default the
+paper's crossover and mutation of pairs of elites, as before the options existed (so every
+earlier map-elites run is reproduced to the last digit); or mutation-only children, each of
+one elite, with a per-gene mutation rate for labels and Gaussian or iso-line steps for real
+genes (Vassiliades & Mouret 2018), which walk across the map (docs/evolution.md). An encoding
+that brings its own operators (`mutate`, e.g. a CPPN's NEAT mutations) varies its genomes
+itself. Parents are drawn uniformly from the archive's elites either way.
+"""
 
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
+from pydantic_core import PydanticCustomError
 
+from softevo.core.ga import operators
+from softevo.core.ga.archive import Elite
 from softevo.core.ga.paper_ga import room_for_children
 from softevo.core.ga.state import GAState, Individual
 from softevo.core.ga.strategy import Strategy
@@ -17,14 +30,64 @@ from softevo.core.ga.variation import mate
 if TYPE_CHECKING:
     from softevo.core.ga.algorithm import GAConfig
 
+#: The options that only mutation-only variation reads.
+_MUTATION_ONLY = ("label_rate", "real", "sigma", "line_sigma")
+
+
+class MapElitesOptions(BaseModel):
+    """How MAP-Elites makes children from its elites. The defaults are the paper's operators
+    (the map-elites runs before these options, to the last digit); the `map-elites` preset sets
+    the mutation-only variation measured best (EXPERIMENTS.md)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
+
+    variation: Literal["crossover", "mutation"] = Field(
+        "crossover",
+        description="crossover: pairs of elites crossed and mutated as the GA does "
+        "(crossover_probability, mutation_probability, mutation_genes, mutation_sigma); "
+        "mutation: every child a mutant of one elite, no crossover (label_rate, real, sigma, "
+        "line_sigma)",
+    )
+    label_rate: float | None = Field(
+        None,
+        ge=0,
+        le=1,
+        description="mutation: the chance that each discrete gene (a voxel's label) is "
+        "redrawn to another value; null: mutation_genes genes a child (at least one)",
+    )
+    real: Literal["gaussian", "iso-line"] = Field(
+        "gaussian",
+        description="mutation: the step of real genes; gaussian: N(0, sigma x range) each; "
+        "iso-line (Vassiliades & Mouret 2018): x + sigma N(0, I) x range + line_sigma "
+        "N(0, 1) (y - x), y a second elite drawn uniformly",
+    )
+    sigma: float | None = Field(
+        None, ge=0, le=10, description="mutation: the Gaussian step / range; null: mutation_sigma"
+    )
+    line_sigma: float = Field(
+        0.2, ge=0, le=10, description="mutation, iso-line: the step along the line to y"
+    )
+
+    @field_validator(*_MUTATION_ONLY)
+    @classmethod
+    def _applies(cls, value: Any, info: ValidationInfo) -> Any:
+        """Settings of mutation-only variation are refused with crossover, not ignored."""
+        if info.data.get("variation") != "mutation":
+            raise PydanticCustomError("not_applicable", "applies to variation 'mutation' only")
+        if info.field_name == "line_sigma" and info.data.get("real") != "iso-line":
+            raise PydanticCustomError("not_applicable", "applies to real 'iso-line' only")
+        return value
+
 
 class MapElites(Strategy):
     name = "map-elites"
     summary = (
         "quality-diversity: parents drawn from an archive that keeps the best robot of every "
-        "cell of `descriptors` x `bins`, children by the GA's crossover and mutation, plus "
-        "immigrants"
+        "cell of `descriptors` x `bins`, children by the GA's crossover and mutation or, "
+        "with options variation 'mutation', mutants of one elite (per-gene label rate, "
+        "Gaussian or iso-line real steps), plus immigrants"
     )
+    Options = MapElitesOptions
     uses = (
         "population", "generations", "descriptors", "bins", "crossover_probability",
         "mutation_probability", "mutation_genes", "mutation_sigma", "immigrants",
@@ -37,14 +100,29 @@ class MapElites(Strategy):
         room_for_children(config)
 
     def breed(self, state: GAState, rng: np.random.Generator) -> list[Individual]:
-        """Children of pairs of elites drawn uniformly from the archive, by the GA's crossover
-        and mutation, then immigrants. Children carry no parent indices (their parents are
-        elites of any generation); their operator says `elite-...`."""
+        """Children of elites drawn uniformly from the archive (`options.variation`), then
+        immigrants. Children carry no parent indices (their parents are elites of any
+        generation); their operator says `elite-...`."""
         config, encoding = self.config, self.encoding
         elites = state.archive.ordered() if state.archive else []
         if not elites:  # nothing survived to breed from: start again at random
             return self.first(rng)
         n_children = config.population - config.n_immigrants
+        if self.options.variation == "mutation":
+            children = [self._mutant(elites, rng) for _ in range(n_children)]
+        else:
+            children = self._crossed(elites, n_children, rng)
+        return [
+            *children[:n_children],
+            *(Individual(encoding.random(rng), "immigrant") for _ in range(config.n_immigrants)),
+        ]
+
+    def _crossed(
+        self, elites: list[Elite], n_children: int, rng: np.random.Generator
+    ) -> list[Individual]:
+        """Children of pairs of elites by the GA's crossover and mutation (`variation.mate`),
+        drawn as before the options existed."""
+        config, encoding = self.config, self.encoding
         mates = rng.integers(0, len(elites), size=2 * math.ceil(n_children / 2))
         children: list[Individual] = []
         for first, second in mates.reshape(-1, 2):
@@ -54,7 +132,30 @@ class MapElites(Strategy):
             )
             for child in mate(config, encoding, pair, (int(first), int(second)), rng):
                 children.append(Individual(child.genome, f"elite-{child.operator}"))
-        return [
-            *children[:n_children],
-            *(Individual(encoding.random(rng), "immigrant") for _ in range(config.n_immigrants)),
-        ]
+        return children
+
+    def _mutant(self, elites: list[Elite], rng: np.random.Generator) -> Individual:
+        """A mutant of one elite drawn uniformly (and a second one drawn, the iso-line's y):
+        labels by `label_rate` (or `mutation_genes` of them), real genes by a Gaussian or an
+        iso-line step. An encoding with operators of its own (`mutate`) applies those."""
+        config, encoding, options = self.config, self.encoding, self.options
+        first, second = (int(i) for i in rng.integers(0, len(elites), size=2))
+        parent = elites[first].genome
+        own = getattr(encoding, "mutate", None)
+        if own is not None:  # e.g. NEAT mutations of a CPPN
+            child = own(config, Individual(parent, "elite"), first, rng)
+            return Individual(child.genome, f"elite-{child.operator}")
+        discrete = np.array(parent.discrete)
+        if options.label_rate is None:
+            genes = max(1, config.mutation_genes)
+            discrete = operators.mutate_discrete(discrete, encoding.alphabet, genes, rng)
+        else:
+            discrete = operators.mutate_each(discrete, encoding.alphabet, options.label_rate, rng)
+        sigma = config.mutation_sigma if options.sigma is None else options.sigma
+        real, bounds = np.array(parent.real), encoding.real_bounds
+        if options.real == "iso-line":
+            other = np.array(elites[second].genome.real)
+            real = operators.iso_line(real, other, bounds, sigma, options.line_sigma, rng)
+            return Individual(encoding.genome(discrete, real), "elite-iso-line")
+        real = operators.mutate_real(real, bounds, sigma, rng)
+        return Individual(encoding.genome(discrete, real), "elite-mutation")

@@ -99,3 +99,36 @@ def roulette(fitness: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarra
     if weights.sum() <= 0:
         weights = finite.astype(float) if finite.any() else np.ones(len(fitness))
     return rng.choice(len(fitness), size=n, p=weights / weights.sum())
+
+
+def mutate_each(
+    genes: np.ndarray, alphabet: np.ndarray, rate: float, rng: np.random.Generator
+) -> np.ndarray:
+    """Per-gene mutation: each gene is redrawn with probability `rate` (one draw per gene,
+    whatever its alphabet), to a value different from its old one; a gene whose alphabet has
+    one value never changes. Children walk as far as `rate` x genes labels a step."""
+    child = genes.copy()
+    hit = (rng.random(len(genes)) < rate) & (alphabet > 1)
+    sizes = alphabet[hit]
+    child[hit] = (child[hit] + rng.integers(1, sizes, size=len(sizes))) % sizes
+    return child
+
+
+def iso_line(
+    x: np.ndarray,
+    y: np.ndarray,
+    bounds: np.ndarray,
+    sigma_iso: float,
+    sigma_line: float,
+    rng: np.random.Generator,
+) -> np.ndarray:
+    """Iso-line variation (Vassiliades & Mouret 2018): x + sigma_iso N(0, I) (high - low) +
+    sigma_line N(0, 1) (y - x), clipped to bounds. The second term steps along the line through
+    two elites (one draw for every gene), where good genomes of different cells tend to lie;
+    the first is a small isotropic step of each gene's range."""
+    if len(x) == 0:
+        return x.copy()
+    low, high = bounds.T
+    isotropic = rng.normal(0.0, 1.0, len(x)) * sigma_iso * (high - low)
+    along = rng.normal(0.0, 1.0) * sigma_line * (y - x)
+    return np.clip(x + isotropic + along, low, high)
