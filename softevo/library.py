@@ -269,5 +269,10 @@ def simulate(
     result, trajectory = run_physics(parsed, record_every=record_every)
     measures = {**result.to_json(), "dropped_voxels": dropped}
     if trajectory is not None:
-        measures["trajectory"] = trajectory.to_json()
+        from softevo.core.replay import finite_part
+
+        kept, blew_up_at = finite_part(trajectory)  # frames up to a blow-up: never NaN in JSON
+        measures["trajectory"] = kept.to_json()
+        if blew_up_at is not None:  # when the frames stop (s); absent for a sound simulation
+            measures["trajectory"]["blew_up_at"] = blew_up_at
     return measures

@@ -33,6 +33,17 @@ def test_simulate_prints_strict_json_and_one_line_why(examples: Path, tmp_path: 
     assert len(lines) == 1 and "blew up" in lines[0] and "sim.dt" in lines[0], done.stderr
 
 
+def test_its_trajectory_file_is_strict_json_up_to_the_blow_up(
+    examples: Path, tmp_path: Path
+) -> None:
+    out = tmp_path / "trajectory.json"
+    done = softevo("simulate", str(_blowing_up(examples, tmp_path)), "--trajectory", str(out))
+    assert done.returncode == 1
+    trajectory = json.loads(out.read_text(), parse_constant=lambda token: 1 / 0)
+    assert trajectory["blew_up_at"] > 0 and len(trajectory["frames"]) >= 1
+    assert trajectory["times"][-1] < trajectory["blew_up_at"]
+
+
 def test_replay_draws_a_robot_that_blew_up_without_a_traceback(
     examples: Path, tmp_path: Path
 ) -> None:
