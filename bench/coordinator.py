@@ -152,7 +152,12 @@ ALGORITHMS: dict[str, dict[str, Any]] = {
         "descriptors": ["voxels", "actuated"],
         "bins": [10, 10],
     },
+    "nsga2": {"algorithm": "nsga2", "objectives": ["speed", "-cost_of_transport"]},
+    "afpo": {"algorithm": "afpo", "objectives": ["speed", "-cost_of_transport"]},
 }
+
+#: `--population` (the paper's 25 unless given), read by `drive` in every fresh interpreter.
+POPULATION = int(os.environ.get("SOFTEVO_BENCH_POPULATION", "25"))
 
 
 def drive(
@@ -162,7 +167,8 @@ def drive(
     arithmetic, wall seconds, individuals, robots simulated)."""
     database = found["db"].Database(url)
     database.upgrade()
-    request = {"preset": "paper-voxel", "seed": 1, "generations": generations}
+    request = {"preset": "paper-voxel", "seed": 1, "generations": generations,
+               "population": POPULATION}  # fmt: skip
     config = found["resolve"]({**request, **ALGORITHMS[algorithm]})
     run = found["create_run"](database, config)
     coordinator = found["Coordinator"](
@@ -249,10 +255,15 @@ def main() -> None:
     )  # fmt: skip
     parser.add_argument("--tree", help="also measure the checkout at this path, interleaved")
     parser.add_argument(
-        "--algorithms", default="ga", help="comma-separated: ga (default), map-elites"
+        "--algorithms", default="ga", help="comma-separated: ga (default), map-elites, nsga2, afpo"
+    )
+    parser.add_argument(
+        "--population", type=int, help="individuals per generation (25, the paper's)"
     )
     parser.add_argument("--once", choices=["sqlite", "postgres"], help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.population:  # the fresh interpreters of each run read it from the environment
+        os.environ["SOFTEVO_BENCH_POPULATION"] = str(args.population)
     algorithms = args.algorithms.split(",")
     if args.once:
         measure_once(args.tree, args.once, args.generations, args.sim_seconds, algorithms[0])
@@ -268,7 +279,8 @@ def main() -> None:
         trees.insert(0, (args.tree, staged))
     print(
         f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-        f"Python {platform.python_version()}, {args.generations} generations of 25, "
+        f"Python {platform.python_version()}, {args.generations} generations of "
+        f"{args.population or 25}, "
         f"{args.sim_seconds:g} s per robot, median of {args.repeats} (trees interleaved), "
         f"{algorithms[0]}"
     )
@@ -295,7 +307,8 @@ def compare_algorithms(args: argparse.Namespace, algorithms: list[str]) -> None:
     against the first's."""
     print(
         f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-        f"Python {platform.python_version()}, {args.generations} generations of 25, "
+        f"Python {platform.python_version()}, {args.generations} generations of "
+        f"{args.population or 25}, "
         f"{args.sim_seconds:g} s per robot, median of {args.repeats} (algorithms interleaved)"
     )
     print("database  algorithm           CPU/individual  / first's  simulated  CPU/simulation"
