@@ -70,3 +70,15 @@ def test_softevo_run_writes_the_pareto_columns(tmp_path: Path) -> None:
         assert not any(pareto.dominates(other, point) for other in on_front)
     for point in everyone[~np.isnan(everyone).any(axis=1)]:  # the rest dominated or equal
         assert any(pareto.dominates(f, point) or (f == point).all() for f in on_front)
+
+
+def test_softevo_run_resumed_gives_the_same_curve_and_front(tmp_path: Path) -> None:
+    flags = ["--preset", "quick", "--shape", "2x2x2", "--population", "6", "--duration", "1",
+             "--algorithm", "afpo", "--objectives=speed,-cost_of_transport",
+             "--workers", "1"]  # fmt: skip
+    whole, part = tmp_path / "whole", tmp_path / "part"
+    assert softevo("run", *flags, "--generations", "4", "--out", str(whole)).returncode == 0
+    assert softevo("run", *flags, "--generations", "2", "--out", str(part)).returncode == 0
+    assert softevo("run", "--resume", str(part), "--generations", "4").returncode == 0
+    for name in ("curve.csv", "front.csv"):
+        assert (part / name).read_text() == (whole / name).read_text()
