@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from softevo.core.config import RunConfig
+from softevo.core.ga.vectors import needs_energy
 
 #: A stored individual's row beyond its genes (ids, hash, operator, parents, times), bytes.
 ROW_BYTES = 300
@@ -51,6 +52,8 @@ class Cost:
 def cost_factor(config: RunConfig) -> float:
     """How much one simulation of this config costs against flat ground scored by speed."""
     terrain = TERRAIN_COST.get(config.sim.terrain.kind, max(TERRAIN_COST.values()))
+    if needs_energy(config.objectives):  # the actuators' work measured, as for efficiency
+        return terrain * OBJECTIVE_COST["efficiency"]
     return terrain * OBJECTIVE_COST.get(config.objective, 1.0)
 
 

@@ -8,6 +8,7 @@ import numpy as np
 from fastapi.testclient import TestClient
 
 from softevo import library
+from softevo.api.cost import cost_factor
 from softevo.core.config import resolve
 from softevo.core.front import front_values
 from softevo.core.ga import pareto
@@ -51,3 +52,9 @@ def test_a_run_without_objectives_has_no_front_and_bad_ones_are_named(
     response = client.post("/runs", json={**RUN, "objectives": ["speed", "sped"]})
     assert response.status_code == 422
     assert "objectives: item 1: unknown measure 'sped'" in response.text
+
+
+def test_objectives_that_read_the_actuators_work_are_budgeted_as_efficiency() -> None:
+    plain, energy = resolve({}), resolve({"objectives": ["speed", "-cost_of_transport"]})
+    assert cost_factor(energy) == cost_factor(resolve({"objective": "efficiency"})) > 1.0
+    assert cost_factor(resolve({"objectives": ["speed", "distance"]})) == cost_factor(plain)
