@@ -105,7 +105,7 @@ class Network:
             raise EncodingError(f"genome of encoding {genome.encoding!r}, expected 'cppn'")
         n_nodes = d[0] if d else -1
         n_links = (len(d) - 1 - 2 * n_nodes) / 4
-        if n_nodes < N_OUT or n_links != int(n_links) or len(r) != 2 + n_links:
+        if n_nodes < N_OUT or n_links < 0 or n_links != int(n_links) or len(r) != 2 + n_links:
             raise EncodingError("cppn genome: its gene counts do not describe a network")
         nodes = tuple((d[1 + 2 * i], d[2 + 2 * i]) for i in range(n_nodes))
         base = 1 + 2 * n_nodes

@@ -57,6 +57,8 @@ def test_the_genome_round_trips_through_json_and_a_bad_one_is_refused() -> None:
         CppnEncoding((2, 2, 2)).check(Genome("cppn", tuple(discrete), genome.real))
     with pytest.raises(EncodingError, match="gene counts"):
         CppnEncoding((2, 2, 2)).check(Genome("cppn", genome.discrete, genome.real[:-1]))
+    with pytest.raises(EncodingError, match="gene counts"):  # more nodes than genes
+        CppnEncoding((2, 2, 2)).check(Genome("cppn", (5, 5, 0, 6, 0, 7, 0), (0.0,)))
 
 
 def test_activations_are_the_fields() -> None:
