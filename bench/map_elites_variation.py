@@ -41,6 +41,13 @@ VARIANTS: dict[str, dict[str, Any]] = {
         "immigrants": 0.0,
         "options": {**MUTATION, "label_rate": 0.02, "real": "iso-line"},
     },
+    "today-spread": {"options": {"random": "spread"}},
+    "explore": {
+        "options": {**MUTATION, "label_rate": 0.05, "real": "iso-line", "random": "spread"},
+    },
+    "explore-r10": {
+        "options": {**MUTATION, "label_rate": 0.1, "real": "iso-line", "random": "spread"},
+    },
     "preset": {"preset": "map-elites", "generations": 80},
 }
 SEEDS = (1, 2, 3)

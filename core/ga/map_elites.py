@@ -26,8 +26,10 @@ from softevo.core.ga.paper_ga import room_for_children
 from softevo.core.ga.state import GAState, Individual
 from softevo.core.ga.strategy import Strategy
 from softevo.core.ga.variation import mate
+from softevo.core.genome import Genome
 
 if TYPE_CHECKING:
+    from softevo.core.encodings import Encoding
     from softevo.core.ga.algorithm import GAConfig
 
 #: The options that only mutation-only variation reads.
@@ -67,6 +69,12 @@ class MapElitesOptions(BaseModel):
     line_sigma: float = Field(
         0.2, ge=0, le=10, description="mutation, iso-line: the step along the line to y"
     )
+    random: Literal["uniform", "spread"] = Field(
+        "uniform",
+        description="the random genomes of generation 0 and the immigrants; uniform: every "
+        "label equally likely (the encoding's own); spread: each genome first draws its own "
+        "label frequencies (a flat Dirichlet), so bodies of every size and mix are drawn",
+    )
 
     @field_validator(*_MUTATION_ONLY)
     @classmethod
@@ -99,11 +107,22 @@ class MapElites(Strategy):
             raise ValueError("descriptors: map-elites needs at least one descriptor")
         room_for_children(config)
 
+    def first(self, rng: np.random.Generator) -> list[Individual]:
+        """The first individuals: `population` random genomes (`options.random`)."""
+        return [Individual(self._random(rng), "random") for _ in range(self.config.population)]
+
+    def _random(self, rng: np.random.Generator) -> Genome:
+        """A random genome as `options.random` asks (an encoding with operators of its own
+        draws its own)."""
+        if self.options.random == "uniform" or hasattr(self.encoding, "mutate"):
+            return self.encoding.random(rng)
+        return spread_random(self.encoding, rng)
+
     def breed(self, state: GAState, rng: np.random.Generator) -> list[Individual]:
         """Children of elites drawn uniformly from the archive (`options.variation`), then
         immigrants. Children carry no parent indices (their parents are elites of any
         generation); their operator says `elite-...`."""
-        config, encoding = self.config, self.encoding
+        config = self.config
         elites = state.archive.ordered() if state.archive else []
         if not elites:  # nothing survived to breed from: start again at random
             return self.first(rng)
@@ -114,7 +133,7 @@ class MapElites(Strategy):
             children = self._crossed(elites, n_children, rng)
         return [
             *children[:n_children],
-            *(Individual(encoding.random(rng), "immigrant") for _ in range(config.n_immigrants)),
+            *(Individual(self._random(rng), "immigrant") for _ in range(config.n_immigrants)),
         ]
 
     def _crossed(
@@ -159,3 +178,18 @@ class MapElites(Strategy):
             return Individual(encoding.genome(discrete, real), "elite-iso-line")
         real = operators.mutate_real(real, bounds, sigma, rng)
         return Individual(encoding.genome(discrete, real), "elite-mutation")
+
+
+def spread_random(encoding: Encoding, rng: np.random.Generator) -> Genome:
+    """A random genome whose labels follow frequencies of its own: each segment draws them
+    from a flat Dirichlet, then its labels from them (so a body's filled and actuated fractions
+    are spread over their ranges, where uniform labels give about 0.8 and 0.5); real genes
+    uniform within their bounds, as `Encoding.random` draws them."""
+    discrete = np.empty(encoding.n_discrete, dtype=np.int64)
+    for segment in encoding.segments:
+        weights = rng.dirichlet(np.ones(segment.alphabet))
+        size = segment.stop - segment.start
+        discrete[segment.start : segment.stop] = rng.choice(segment.alphabet, size, p=weights)
+    low, high = encoding.real_bounds.T
+    real = rng.uniform(low, high) if len(encoding.real_bounds) else np.empty(0)
+    return encoding.genome(discrete, real)

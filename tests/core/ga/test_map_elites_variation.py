@@ -14,6 +14,7 @@ from softevo.core.config import ConfigError, resolve
 from softevo.core.encodings import VoxelEncoding
 from softevo.core.ga.algorithm import describe_strategies, make_strategy
 from softevo.core.ga.archive import Archive
+from softevo.core.ga.map_elites import spread_random
 from softevo.core.ga.operators import iso_line, mutate_each
 from softevo.core.ga.state import GAState, Individual
 
@@ -150,3 +151,27 @@ def test_an_encoding_with_its_own_operators_mutates_its_genomes() -> None:
 def test_a_preset_s_options_stay_with_its_algorithm() -> None:
     assert resolve({"preset": "map-elites", "algorithm": "ga"}).options == {}
     assert resolve({"preset": "paper-voxel", "algorithm": "map-elites"}).options == {}
+
+
+def test_spread_random_genomes_draw_bodies_of_every_size() -> None:
+    encoding = VoxelEncoding((4, 4, 4))
+    spread = [spread_random(encoding, np.random.default_rng(s)) for s in range(200)]
+    uniform = [encoding.random(np.random.default_rng(s)) for s in range(200)]
+    assert spread_random(encoding, np.random.default_rng(3)) == spread[3]
+    for genome in spread:
+        encoding.check(genome)  # labels in the alphabet, real genes within their bounds
+        assert all(low <= g <= high for g, (low, high) in zip(genome.real, encoding.real_bounds,
+                                                                strict=True))  # fmt: skip
+    filled = [np.mean(np.array(g.discrete) != 0) for g in spread]
+    assert min(filled) < 0.4 and max(filled) > 0.95  # uniform labels: about 0.8 every time
+    assert np.std(filled) > 3 * np.std([np.mean(np.array(g.discrete) != 0) for g in uniform])
+
+
+def test_spread_random_is_asked_for_generation_0_and_the_immigrants() -> None:
+    strategy, state = elites_state({"random": "spread"})
+    uniform, _ = elites_state({})
+    first = strategy.first(np.random.default_rng(2))
+    assert first != uniform.first(np.random.default_rng(2))
+    assert [i.operator for i in first] == ["random"] * 6
+    children, before = strategy.ask(state), uniform.ask(state)
+    assert children[:-1] == before[:-1] and children[-1] != before[-1]  # only the immigrant
