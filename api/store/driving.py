@@ -196,8 +196,19 @@ def _fitness_rows(
 
 
 def measures_text(record: Mapping[str, float] | None) -> EncodedJSON:
-    """A record of measures as `individuals.measures` stores it: a JSON object, NaN as null."""
-    return EncodedJSON(json.dumps(to_null_record(record)) if record else "{}")
+    """A record of measures as `individuals.measures` stores it: a compact JSON object, NaN as
+    null. Encoded once per robot by the coordinator, so NaN is replaced in the text (a measure's
+    name, an identifier, never holds it) rather than in a copy of the record first."""
+    if not record:
+        return EncodedJSON("{}")
+    text = _ENCODE(record)
+    if "Infinity" in text:  # not a number JSON knows either: the slow, exact way
+        return EncodedJSON(_ENCODE(to_null_record(record)))
+    return EncodedJSON(text.replace("NaN", "null"))
+
+
+#: One encoder for every record (`json.dumps` with options builds one per call).
+_ENCODE = json.JSONEncoder(separators=(",", ":")).encode
 
 
 def _set_fitness(connection: Connection, rows: list[dict[str, Any]]) -> None:
