@@ -5,6 +5,7 @@ intact, read, taken over and finished with the undisturbed curve and archive, an
 
 from __future__ import annotations
 
+import json
 import math
 import threading
 from typing import Any
@@ -16,7 +17,7 @@ from sqlalchemy import text
 from softevo.api import store
 from softevo.api.coordinator import Coordinator
 from softevo.api.db import Database, alembic_config
-from softevo.api.store.driving import GenerationCommit, Landed
+from softevo.api.store.driving import GenerationCommit, Landed, measures_text
 from softevo.core.config import resolve
 from softevo.core.evaluation import SerialEvaluator
 from softevo.core.evaluator import BatchResult
@@ -57,6 +58,17 @@ def test_a_record_is_written_with_its_fitness_and_read_back_to_the_bit(db: Datab
     assert measures["x2"] == {}  # landed without a record
     items, _ = store.list_individuals(db, store.get_run(db, run_id), 0, 0, 10)
     assert items[0]["measures"] == {**RECORD, "energy": None} and items[2]["measures"] == {}
+
+
+def test_a_record_is_stored_as_json_with_every_value_that_is_not_a_number_null() -> None:
+    text = measures_text({"speed": 0.1, "energy": math.nan, "efficiency": math.inf,
+                          "cost_of_transport": -math.inf})  # fmt: skip
+    assert json.loads(text) == {"speed": 0.1, "energy": None, "efficiency": None,
+                                "cost_of_transport": None}  # fmt: skip
+    assert json.loads(measures_text({"speed": 0.1, "energy": math.nan})) == {
+        "speed": 0.1, "energy": None,
+    }  # fmt: skip
+    assert measures_text({}) == measures_text(None) == "{}"
 
 
 def at_revision_0003(db: Database, objective: str) -> int:
