@@ -1,6 +1,7 @@
 // One run, live: its curve, population dot plot, diversity and the 3D replay of the best robot.
 import { CURVE_SERIES, GENERATION_AXIS, api, box, chart, duration, fmt, h, objective, onLeave, progressBar, softevo, status, terrainText, view } from "./api.js";
 import { ArchiveMap } from "./archive.js";
+import { frontPanel } from "./front.js";
 import { Replay } from "./replay.js";
 import { cancelButton } from "./runs.js";
 
@@ -137,6 +138,8 @@ export async function runView(runId) {
       .catch((error) => replayPanel.append(h("p", { class: "error" }, error.message)));
   }) : null;
   if (archive) await archive.update();
+  const front = frontPanel(run, charts, replay, replayPanel);
+  if (front) await front.update();
   // The best robot's replay, shown with the summary in one step: if a better robot was committed
   // while the replay was fetched (the run is read again to know), the replay says so and the
   // next update fetches the new one
@@ -169,6 +172,7 @@ export async function runView(runId) {
       diversityPlot.setData([curve.map((r) => r.generation), curve.map((r) => r.diversity)]);
       for (const [key, plot] of qdCharts) plot.setData(qdData(key));
       if (archive) await archive.update();
+      if (front) await front.update();
       // follow the fastest robot as it changes, unless the user picked an individual; the
       // summary's best changes with the replay's, never before it
       const following = replay.best !== null;
