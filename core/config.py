@@ -155,10 +155,15 @@ PRESETS: dict[str, dict[str, Any]] = {
 }
 
 PRESETS.update(task_presets(_PAPER_VOXEL))
-#: Quality-diversity on the paper's phase 3: the same GA operators, parents from the archive.
+#: Quality-diversity on the paper's phase 3: parents from the archive, each child a mutant of one
+#: elite (10 % of labels redrawn, iso-line steps of a, b, c), generation 0 and the immigrants of
+#: spread label frequencies: the variation measured best (EXPERIMENTS.md). The paper's operators
+#: stay reachable: `"preset": "paper-voxel", "algorithm": "map-elites"` (default options).
 PRESETS["map-elites"] = {
     **_PAPER_VOXEL, "algorithm": "map-elites", "descriptors": ["voxels", "actuated"],
     "bins": [8, 8],
+    "options": {"variation": "mutation", "label_rate": 0.1, "real": "iso-line",
+                "random": "spread"},
 }  # fmt: skip
 
 #: CPPN bodies in a big box: the paper's GA with NEAT variation (every copy mutated, half the
@@ -177,7 +182,8 @@ PRESET_DESCRIPTIONS = {
     "scores 2.5 s of motion at 1 rad/s, under half an actuation period, so its speeds are one "
     "lean, not a gait's (its seed-1 best: 0.223 m/s over 3 s, 0.070 m/s over 5 s)",
     "map-elites": "paper-voxel as MAP-Elites: the best robot of every cell of filled x actuated "
-    "fraction (8 x 8), parents drawn from the archive (docs/evolution.md)",
+    "fraction (8 x 8), children mutants of elites drawn from the archive (10 % of labels, "
+    "iso-line real steps), spread random genomes (docs/evolution.md)",
     "cppn-8x8x8": "a CPPN grows 8x8x8 crawlers (bodies, phases and amplitudes), the paper's "
     "GA with NEAT variation, 25 x 40 generations (docs/evolution.md)",
     **{name: f"paper-voxel task: {asks}" for name, (asks, _, _) in TASKS.items()},
@@ -212,9 +218,9 @@ def resolve(request: dict[str, Any]) -> RunConfig:
             f'{{"sim": {{"{name}": ...}}}} (sim.{name})'
         )
     merged = {**PRESETS[preset], **request, "preset": preset}
-    if merged.get("algorithm", "ga") != PRESETS[preset].get("algorithm", "ga"):
-        if "options" not in request:  # the preset's options are its algorithm's
-            merged.pop("options", None)
+    other = merged.get("algorithm", "ga") != PRESETS[preset].get("algorithm", "ga")
+    if other and "options" not in request:  # the preset's options are its algorithm's
+        merged.pop("options", None)
     _default_map(merged, request)
     sim_overrides = request.get("sim", {})
     if not isinstance(sim_overrides, dict):
