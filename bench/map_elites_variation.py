@@ -27,6 +27,7 @@ BASE: dict[str, Any] = {
 MUTATION = {"variation": "mutation"}
 VARIANTS: dict[str, dict[str, Any]] = {
     "today": {},
+    "today-g100": {"generations": 100},  # as many simulations as the others (its cache saves)
     "gaussian": {"options": {**MUTATION, "label_rate": 0.05}},
     "iso-line": {"options": {**MUTATION, "label_rate": 0.05, "real": "iso-line"}},
     "iso-line-0imm": {
@@ -48,7 +49,7 @@ VARIANTS: dict[str, dict[str, Any]] = {
     "explore-r10": {
         "options": {**MUTATION, "label_rate": 0.1, "real": "iso-line", "random": "spread"},
     },
-    "preset": {"preset": "map-elites", "generations": 80},
+    "preset": {"preset": "map-elites", "generations": 80},  # today-spread's config
 }
 SEEDS = (1, 2, 3)
 

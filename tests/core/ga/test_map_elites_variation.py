@@ -150,8 +150,7 @@ def test_an_encoding_with_its_own_operators_mutates_its_genomes() -> None:
 
 def test_a_preset_s_options_stay_with_its_algorithm() -> None:
     preset = resolve({"preset": "map-elites"})
-    assert preset.options == {"variation": "mutation", "label_rate": 0.1, "real": "iso-line",
-                              "random": "spread"}  # fmt: skip
+    assert preset.options == {"random": "spread"}
     assert resolve({"preset": "map-elites", "algorithm": "ga"}).options == {}
     assert resolve({"preset": "paper-voxel", "algorithm": "map-elites"}).options == {}
 
