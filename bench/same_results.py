@@ -1,0 +1,137 @@
+"""Every committed result re-checked: `python bench/same_results.py --tree OLD [--full]`.
+
+A refactor of the search side must keep every run the same to the last digit. This runs one
+short run of every preset, algorithm, encoding and descriptor set (and of every task) in this
+checkout and in the checkout at `--tree` (an earlier commit in a `git worktree`), each in a
+fresh interpreter, and compares the SHA-256 of their curves (every column, every digit), best
+robots and archives. `--full` also re-runs committed rows of `docs/experiments/results.csv` at
+their full length in this checkout and compares their best speeds with the committed digits.
+Prints one line per case and exits 1 on any difference.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import hashlib
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parent.parent
+SHORT = {"population": 8, "generations": 4, "seed": 3, "sim": {"duration": 1.5, "settle_time": 0.5}}
+CASES: dict[str, dict[str, Any]] = {
+    **{preset: {"preset": preset, **SHORT} for preset in (
+        "paper-voxel", "voxel-plus", "quick", "map-elites", "task-flat", "task-slope",
+        "task-stairs", "task-rough", "task-hurdles")},
+    "paper-cube": {"preset": "paper-cube", **SHORT, "generations": 6},
+    "random": {"preset": "quick", "algorithm": "random", **SHORT},
+    "hillclimb": {"preset": "quick", "algorithm": "hillclimb", **SHORT},
+    "tournament": {"preset": "quick", "selection": "tournament", **SHORT},
+    "roulette": {"preset": "quick", "selection": "roulette", **SHORT},
+    "heading-archive": {"preset": "quick", "algorithm": "map-elites",
+                        "descriptors": ["heading", "voxels"], "bins": [6, 4], **SHORT},
+    "ga+archive": {"preset": "quick", "descriptors": ["soft", "height"], "bins": [4, 4], **SHORT},
+    "voxel-phase": {"preset": "map-elites", "encoding": "voxel-phase", "shape": [3, 3, 2],
+                    **SHORT},
+    "spring": {"preset": "quick", "encoding": "spring", "shape": [2, 2, 2], **SHORT},
+    "efficiency": {"preset": "quick", "objective": "efficiency", **SHORT},
+}  # fmt: skip
+
+ONE = """
+import hashlib, json, sys
+from softevo import library
+result = library.evolve(json.loads(sys.argv[1]), workers=1)
+digest = lambda value: hashlib.sha256(json.dumps(value, sort_keys=True).encode()).hexdigest()[:16]
+print(json.dumps({"curve": digest(result.curve), "best": digest(result.best),
+                  "archive": digest(result.archive), "last": result.curve[-1]}))
+"""
+
+
+def stage(tree: Path) -> Path:
+    """A folder where `import softevo` finds `tree`'s code as it would be installed."""
+    staged = Path(tempfile.mkdtemp(prefix="softevo-tree-"))
+    shutil.copytree(tree / "softevo", staged / "softevo")
+    for folder in ("core", "api", "worker", "migrations"):
+        shutil.copytree(tree / folder, staged / "softevo" / folder)
+    return staged
+
+
+def run(config: dict[str, Any], path: Path | None) -> dict[str, Any]:
+    env = dict(os.environ)
+    if path is not None:
+        env["PYTHONPATH"] = str(path)
+    done = subprocess.run(
+        [sys.executable, "-c", ONE, json.dumps(config)],
+        capture_output=True, text=True, env=env, cwd=tempfile.gettempdir(), check=False,
+    )  # fmt: skip
+    if done.returncode != 0:
+        raise SystemExit(f"{config}: {done.stderr.strip().splitlines()[-1]}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def compare_trees(old: Path, new: Path | None) -> int:
+    staged, against = stage(old), None if new is None else stage(new)
+    differences = 0
+    try:
+        for name, config in CASES.items():
+            before, after = run(config, staged), run(config, against)
+            same = all(before[key] == after[key] for key in ("curve", "best", "archive"))
+            differences += not same
+            print(f"{name:16} {'same' if same else 'DIFFERENT'}  curve {after['curve']}  "
+                  f"best so far {after['last']['best_so_far']!r}")  # fmt: skip
+    finally:
+        for folder in (staged, against):
+            if folder is not None:
+                shutil.rmtree(folder, ignore_errors=True)
+    return differences
+
+
+def committed_rows(limit: int) -> int:
+    """The committed boxes rows' seeds at full length, against their committed digits."""
+    differences = 0
+    with (ROOT / "docs" / "experiments" / "results.csv").open() as handle:
+        rows = [row for row in csv.DictReader(handle) if row["experiment"] == "boxes"]
+    for row in rows[:limit]:
+        shape = [int(side) for side in row["shape"].split("x")]
+        for item in row["best_by_seed"].split():
+            seed, best = item.split(":")
+            config = {"preset": row["variant"], "shape": shape, "seed": int(seed)}
+            found = run(config, None)["last"]["best_so_far"]
+            same = f"{found:.6g}" == best
+            differences += not same
+            print(f"{row['variant']} {row['shape']} seed {seed}: committed {best}, now "
+                  f"{found:.6g} {'same' if same else 'DIFFERENT'}")  # fmt: skip
+    return differences
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--tree", type=Path, required=True, help="the earlier checkout")
+    parser.add_argument(
+        "--against", type=Path, help="compare with this checkout instead of the installed one"
+    )
+    parser.add_argument(
+        "--full",
+        type=int,
+        default=0,
+        metavar="ROWS",
+        help="also re-run this many committed boxes rows at full length",
+    )
+    args = parser.parse_args()
+    digest = hashlib.sha256(json.dumps(CASES, sort_keys=True).encode()).hexdigest()[:8]
+    print(f"{len(CASES)} cases ({digest}), {args.tree} against {args.against or 'this checkout'}")
+    differences = compare_trees(args.tree, args.against)
+    if args.full:
+        differences += committed_rows(args.full)
+    print("every result the same" if differences == 0 else f"{differences} differences")
+    return 1 if differences else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
