@@ -45,7 +45,7 @@ def evaluate_robot_files(robot_files: Sequence[dict[str, Any]]) -> Measures:
     objectives = [file_objective(d) for d, r in zip(robot_files, robots, strict=True) if r]
     built = [robot for robot in robots if robot is not None]
     energy = any(objective in NEEDS_ENERGY for objective in objectives) or any(
-        file_energy(document) for document in robot_files
+        file_energy(document) for document, robot in zip(robot_files, robots, strict=True) if robot
     )
     results = simulate_batch(built, energy=energy, small_alone=True) if built else []
     simulated = iter(zip(results, objectives, strict=True))
