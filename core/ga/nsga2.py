@@ -23,10 +23,8 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from softevo.core.ga import pareto
 from softevo.core.ga.state import GAState, Individual
-from softevo.core.ga.stats import GenerationStats
-from softevo.core.ga.strategy import Records, Strategy
+from softevo.core.ga.strategy import Strategy
 from softevo.core.ga.variation import mate
-from softevo.core.ga.vectors import objective_values
 from softevo.core.nulls import from_nulls, to_nulls
 
 
@@ -87,25 +85,7 @@ class NSGA2(Strategy):
         "mutation_probability", "mutation_genes", "mutation_sigma",
     )  # fmt: skip
     Options = SurvivorOptions
-
-    def tell(
-        self,
-        state: GAState,
-        individuals: list[Individual],
-        fitness: np.ndarray | list[float],
-        *,
-        measures: Records | None = None,
-        **counts: int,
-    ) -> tuple[GAState, GenerationStats]:
-        """The shared `tell`, keeping each member's objective values and birth for `breed`."""
-        following, stats = super().tell(state, individuals, fitness, measures=measures, **counts)
-        records = measures if measures is not None else [{} for _ in individuals]
-        values = objective_values(self.config.objectives, records, np.asarray(fitness, float))
-        following.data = {
-            **(following.data or {}),
-            **self.kept(state, individuals, values),
-        }
-        return following, stats
+    reads_objectives = True
 
     def kept(
         self, state: GAState, individuals: list[Individual], values: np.ndarray

@@ -59,6 +59,8 @@ class Strategy(ABC):
     uses: ClassVar[tuple[str, ...]] = ("population", "generations")
     #: This strategy's own settings, validated from the run config's `options`.
     Options: ClassVar[type[BaseModel]] = NoOptions
+    #: Whether `tell` hands `kept` each individual's objective values (NSGA-II, AFPO).
+    reads_objectives: ClassVar[bool] = False
 
     def __init__(self, config: GAConfig, encoding: Encoding) -> None:
         self.config = config
@@ -128,11 +130,17 @@ class Strategy(ABC):
         if archive is not None:
             stats = replace(stats, coverage=archive.coverage, qd_score=archive.qd_score)
         data = state.data
-        if config_objectives := self.config.objectives:
-            front = _front(state.data, objective_values(config_objectives, records, values))
+        objectives = self.config.objectives
+        vectors = None  # each individual's objective values, computed once for all who read them
+        if objectives or self.reads_objectives:
+            vectors = objective_values(objectives, records, values)
+        if objectives:
+            front = _front(state.data, vectors)
             data = {**(state.data or {}), FRONT_KEY: front.tolist()}
-            volume = pareto.hypervolume(front, reference_point(config_objectives))
+            volume = pareto.hypervolume(front, reference_point(objectives))
             stats = replace(stats, hypervolume=volume, front_size=len(front))
+        if vectors is not None and self.reads_objectives:
+            data = {**(data or {}), **self.kept(state, individuals, vectors)}
         following = GAState(
             seed=state.seed,
             generation=state.generation + 1,
@@ -145,6 +153,13 @@ class Strategy(ABC):
             data=data,
         )
         return following, stats
+
+    def kept(
+        self, state: GAState, individuals: list[Individual], values: np.ndarray
+    ) -> dict[str, Any]:
+        """What a strategy with `reads_objectives` keeps in `GAState.data` (JSON) of a told
+        batch whose maximised objective values are `values` ([N, M]); nothing by default."""
+        return {}
 
     def archive(
         self, state: GAState, individuals: list[Individual], fitness: np.ndarray, records: Records
