@@ -1,8 +1,9 @@
-"""The reads of a run's Pareto front: every evaluated individual's measures, and the genomes of
-the few on the front."""
+"""The reads of a run's Pareto front: every evaluated individual's measures, streamed, and the
+genomes of the few on the front."""
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from typing import Any
 
 from sqlalchemy import select, tuple_
@@ -12,11 +13,10 @@ from softevo.api.models import Individual
 from softevo.core.status import IndividualStatus
 
 
-def evaluated(db: Database, run_id: int) -> list[dict[str, Any]]:
-    """Every evaluated individual of the run (simulated or from the cache), each genome once at
-    its first appearance, in (generation, index) order; never a genome."""
-    seen: set[str] = set()
-    rows: list[dict[str, Any]] = []
+def evaluated(db: Database, run_id: int, chunk: int = 4096) -> Iterator[dict[str, Any]]:
+    """Every evaluated individual of the run (simulated or from the cache), in (generation,
+    index) order, fetched `chunk` rows at a time and never with its genome; a genome met again
+    keeps its `genome_hash`, by which `front_rows` counts it once."""
     with db.read() as session:
         result = session.execute(
             select(
@@ -30,14 +30,12 @@ def evaluated(db: Database, run_id: int) -> list[dict[str, Any]]:
                 ),
             )
             .order_by(Individual.generation, Individual.index)
+            .execution_options(yield_per=chunk)
         )  # fmt: skip
         for generation, index, fitness, operator, measures, genome_hash in result:
-            if genome_hash in seen:
-                continue
-            seen.add(genome_hash)
-            rows.append({"generation": generation, "index": index, "fitness": fitness,
-                         "operator": operator, "measures": measures or {}})  # fmt: skip
-    return rows
+            yield {"generation": generation, "index": index, "fitness": fitness,
+                   "operator": operator, "measures": measures or {},
+                   "genome_hash": genome_hash}  # fmt: skip
 
 
 def genomes(db: Database, run_id: int, where: list[tuple[int, int]]) -> dict[tuple[int, int], Any]:
