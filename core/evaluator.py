@@ -182,6 +182,11 @@ def _forget_hands() -> None:
 os.register_at_fork(after_in_child=_forget_hands)
 
 
+def hand_over(work: Callable[..., None], *args: Any) -> None:
+    """Run `work(*args)` on one of the shared batch threads (`_HANDS`)."""
+    _HANDS.submit(work, *args)
+
+
 #: Longest the step's thread waits between calls of `check` while batches run, when nothing
 #: (the last batch, a due one, the caller's alarm) wakes it sooner.
 CHECK_SECONDS = 1.0

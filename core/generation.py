@@ -27,6 +27,7 @@ from softevo.core.ga.vectors import needs_energy
 from softevo.core.limits import BATCH_SIZE, IN_FLIGHT
 from softevo.core.robot_file import robot_to_json
 from softevo.core.settings import SimSettings
+from softevo.core.stream import Flights, stream_step
 
 
 class Hooks:
@@ -53,6 +54,17 @@ class Hooks:
     def batch(self, generation: int, indices: list[int], result: BatchResult) -> None:
         """One batch's fitness and measures landed (for `indices` of the generation, in
         order)."""
+
+    def births(
+        self, generation: int, individuals: dict[int, Individual]
+    ) -> tuple[dict[int, float], dict[int, dict[str, float]]]:
+        """A streaming strategy bred these members of row `generation` (by index): keep them;
+        return what is known of them, as `individuals` does."""
+        return {}, {}
+
+    def flush(self) -> None:
+        """A streaming step's `check` said a write was due and no batch landed since: write
+        what waits."""
 
 
 @dataclass(frozen=True)
@@ -106,6 +118,15 @@ class Engine:
         a run without them sends the files it always did)."""
         return needs_energy(self.algorithm.config.objectives)
 
+    def flights(self, evaluator: Evaluator, alarm: threading.Event | None) -> Flights:
+        """The run's batches in flight, kept across the steps of a streaming strategy."""
+        flights = self.__dict__.get("_flights")
+        if flights is None or flights.evaluator is not evaluator:
+            alarm = alarm or threading.Event()
+            flights = Flights(evaluator, self.batch_size, self.in_flight, alarm)
+            self.__dict__["_flights"] = flights
+        return flights
+
     def step(
         self,
         state: GAState,
@@ -120,6 +141,8 @@ class Engine:
         (genome hash -> record of measures, beside it); `key` prefixes batch keys."""
         hooks = hooks or Hooks()
         measures = {} if measures is None else measures
+        if self.algorithm.streaming:
+            return stream_step(self, state, cache, evaluator, hooks, key, measures)
         started = time.perf_counter()
         generation = state.generation
         individuals = self.algorithm.ask(state)

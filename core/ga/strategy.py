@@ -59,8 +59,12 @@ class Strategy(ABC):
     uses: ClassVar[tuple[str, ...]] = ("population", "generations")
     #: This strategy's own settings, validated from the run config's `options`.
     Options: ClassVar[type[BaseModel]] = NoOptions
-    #: Whether `tell` hands `kept` each individual's objective values (NSGA-II, AFPO).
-    reads_objectives: ClassVar[bool] = False
+    #: Whether `tell` hands `kept` each individual's objective values (NSGA-II, AFPO; the GA
+    #: with `weights` sets it per instance, from its options).
+    reads_objectives: bool = False
+    #: Whether the step tells this strategy one birth at a time (`steady_state.Nursery`)
+    #: rather than a whole generation at once.
+    streaming: ClassVar[bool] = False
 
     def __init__(self, config: GAConfig, encoding: Encoding) -> None:
         self.config = config
@@ -171,14 +175,25 @@ class Strategy(ABC):
         if not config.descriptors:
             return None
         archive = (state.archive or Archive(config.descriptors, config.bins)).copy()
-        box = self.encoding.shape
         measured = zip(individuals, fitness, records, strict=True)
         for index, (individual, value, record) in enumerate(measured):
-            if math.isfinite(value):
-                labels = self.encoding.labels(individual.genome)
-                values = describe(config.descriptors, labels, box, record)
-                archive.add(values, float(value), state.generation, index, individual.genome)
+            self.offer(archive, individual, float(value), record, state.generation, index)
         return archive
+
+    def offer(
+        self,
+        archive: Archive,
+        individual: Individual,
+        value: float,
+        record: Mapping[str, float],
+        generation: int,
+        index: int,
+    ) -> None:
+        """Offer one robot that did not fail to the cell its descriptors fall in."""
+        if math.isfinite(value):
+            labels = self.encoding.labels(individual.genome)
+            values = describe(self.config.descriptors, labels, self.encoding.shape, record)
+            archive.add(values, value, generation, index, individual.genome)
 
     @classmethod
     def describe(cls) -> dict[str, Any]:
