@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -148,3 +149,55 @@ def test_a_state_without_the_strategy_data_is_refused_in_one_line() -> None:
     state.data = {"front": []}
     with pytest.raises(ValueError, match="state data: values and born are missing"):
         strategy.ask(state)
+
+
+def test_a_weighted_ga_selects_on_the_weighted_sum_and_keeps_speed_as_fitness() -> None:
+    # weight 1 on speed, 0 on cost: selection ranks what the plain GA ranks (fitness = speed)
+    plain = Run(4, algorithm="ga").finish()
+    assert Run(4, algorithm="ga", options={"weights": [1.0, 0.0]}).finish() == plain
+    weighted = Run(4, algorithm="ga", options={"weights": [1.0, 5.0]})
+    curve = weighted.finish()
+    assert curve != plain  # cheap robots now survive in place of fast ones
+    assert [row["best_so_far"] for row in curve] == sorted(r["best_so_far"] for r in curve)
+    sums = weighted.state.data["weighted"]
+    last = toy_measures(weighted.state.previous)
+    assert sums == pytest.approx([r["speed"] - 5.0 * r["cost_of_transport"] for r in last])
+    part = Run(4, algorithm="ga", options={"weights": [1.0, 5.0]})
+    for _ in range(3):
+        part.step()
+    part.state = GAState.from_json(json.loads(part.state.to_text()))
+    assert part.finish() == curve
+
+
+def test_a_weighted_ga_keeps_the_best_sum_not_the_fastest() -> None:
+    nan = math.nan
+    config = GAConfig.model_validate({
+        "population": 4, "generations": 5, "objectives": OBJECTIVES, "selection": "tournament",
+        "options": {"weights": [1.0, 1.0]},
+    })  # fmt: skip
+    strategy = make_strategy(config, make_encoding("voxel", (2, 2, 2)))
+    rng = np.random.default_rng(0)
+    previous = [Individual(strategy.encoding.random(rng), "random") for _ in range(4)]
+    state = GAState(
+        seed=0, generation=2, previous=previous, previous_fitness=[0.9, 0.1, nan, 0.5],
+        data={"weighted": [-2.0, 0.3, None, -0.1]},
+    )  # fmt: skip
+    survivors = [item.parents for item in strategy.ask(state) if item.operator == "survivor"]
+    assert survivors == [(1,)]  # the elite by sum, not the fastest (0) nor the failed (2)
+    state.data = {}
+    with pytest.raises(ValueError, match="state data: weighted must hold one sum"):
+        strategy.ask(state)
+
+
+@pytest.mark.parametrize(
+    ("options", "objectives", "words"),
+    [
+        ({"weights": [1.0]}, OBJECTIVES, "one weight per objective, got 1 for 2"),
+        ({"weights": [1.0]}, [], "got 1 for 0 objectives (set `objectives`)"),
+        ({"weights": [-1.0, 2.0]}, OBJECTIVES, "each weight >= 0 and one > 0"),
+        ({"weights": [0, 0]}, OBJECTIVES, "each weight >= 0 and one > 0"),
+    ],
+)
+def test_bad_weights_are_named(options: dict, objectives: list, words: str) -> None:
+    with pytest.raises(ValueError, match=re.escape(words)):
+        GAConfig.model_validate({"objectives": objectives, "options": options})
