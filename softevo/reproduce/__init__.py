@@ -29,6 +29,8 @@ from softevo.reproduce.champions import breathing_cube, champions, champions_tab
 from softevo.reproduce.client import service
 from softevo.reproduce.experiments import Experiments, wall_seconds
 from softevo.reproduce.figures import write_figures
+from softevo.reproduce.objectives import run_objectives
+from softevo.reproduce.objectives_report import write_objectives
 from softevo.reproduce.plan import FULL, QUICK
 from softevo.reproduce.qd import run_qd, write_qd
 from softevo.reproduce.tables import fmt, write_tables
@@ -59,10 +61,19 @@ def add_parser(commands: Any) -> None:
         "GA, MAP-Elites on its budget, voxel-phase): qd.csv, qd.md, qd.png, qd_archives.png",
     )  # fmt: skip
     parser.add_argument(
+        "--objectives", action="store_true",
+        help="run several objectives and age protection instead (4x4x4 x seeds 1-3: NSGA-II, a "
+        "weighted-sum GA with three weightings and random search, speed against cost of "
+        "transport, on the same simulations; 4x4x3, 4x4x4, 3x3x6: AFPO against the GA on "
+        "speed alone): tradeoff.csv, afpo.csv, objectives.md, fronts.png, hypervolume.png, "
+        "afpo.png",
+    )  # fmt: skip
+    parser.add_argument(
         "--out",
         help="output folder, relative to the current folder (default docs/experiments; with "
-        "--tasks docs/experiments/tasks, with --qd docs/experiments/qd: the repository's own "
-        "when run from its root); the full path is printed first",
+        "--tasks docs/experiments/tasks, with --qd docs/experiments/qd, with --objectives "
+        "docs/experiments/objectives: the repository's own when run from its root); the full "
+        "path is printed first",
     )
     parser.add_argument(
         "--url", help="a running service (token from SOFTEVO_API_TOKEN); default: start one"
@@ -81,9 +92,10 @@ def add_parser(commands: Any) -> None:
 
 def reproduce_command(args: argparse.Namespace) -> int:
     plan = QUICK if args.quick else FULL
-    if args.tasks and args.qd:
-        args.parser.error("--tasks and --qd are two suites: run one at a time")
-    suite = "tasks" if args.tasks else "qd" if args.qd else None
+    chosen = [name for name in ("tasks", "qd", "objectives") if getattr(args, name)]
+    if len(chosen) > 1:
+        args.parser.error(f"--{' and --'.join(chosen)} are {len(chosen)} suites: run one at a time")
+    suite = chosen[0] if chosen else None
     out = Path(args.out or (f"docs/experiments/{suite}" if suite else "docs/experiments"))
     try:
         out.mkdir(parents=True, exist_ok=True)
@@ -119,7 +131,8 @@ def reproduce_command(args: argparse.Namespace) -> int:
 
 
 def _suite(args: argparse.Namespace, out: Path, started: float, suite: str) -> int:
-    """`--tasks` or `--qd`: one suite through the service, its table and figures."""
+    """`--tasks`, `--qd` or `--objectives`: one suite through the service, its tables and
+    figures."""
     flags = " --quick" if args.quick else ""
     command = f"softevo reproduce --{suite}{flags} --out {out}" + (
         f" --url {args.url}" if args.url else ""
@@ -129,6 +142,8 @@ def _suite(args: argparse.Namespace, out: Path, started: float, suite: str) -> i
         with service(args.url, out, args.workers, args.resume) as client:
             if suite == "qd":
                 rows, archives = run_qd(client, args.quick)
+            elif suite == "objectives":
+                results = run_objectives(client, args.quick)
             else:
                 rows = run_suite(client, args.quick)
     except APIError as error:
@@ -139,6 +154,8 @@ def _suite(args: argparse.Namespace, out: Path, started: float, suite: str) -> i
     wall = time.monotonic() - started
     if suite == "qd":
         write_qd(rows, archives, out, command, wall)
+    elif suite == "objectives":
+        write_objectives(results, out, command, wall)
     else:
         write_suite(rows, out, command, wall)
     print(f"done in {wall:.0f} s: {out / f'{suite}.md'}")
