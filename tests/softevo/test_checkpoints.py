@@ -25,10 +25,20 @@ def generations_in_population(out: Path) -> list[int]:
         return sorted({int(row["generation"]) for row in csv.DictReader(handle)})
 
 
+#: NSGA-II and AFPO with objectives: their kept values, births, lineages and the front so far
+#: ride in the state, and must come back from the files as they were.
+PARETO = {"objectives": ["speed", "-cost_of_transport"]}
+
+
+@pytest.mark.parametrize(
+    "changes",
+    [{}, {"algorithm": "nsga2", **PARETO}, {"algorithm": "afpo", **PARETO}],
+    ids=["ga", "nsga2", "afpo"],
+)
 def test_an_interrupt_writes_the_last_whole_generation_and_resuming_goes_on(
-    tmp_path: Path,
+    tmp_path: Path, changes: dict
 ) -> None:
-    config = resolve(CONFIG)
+    config = resolve({**CONFIG, **changes})
     whole = Evolution.start(config)
     whole.run(SerialEvaluator())
     evolution, evaluator = Evolution.start(config), SerialEvaluator()
@@ -50,6 +60,9 @@ def test_an_interrupt_writes_the_last_whole_generation_and_resuming_goes_on(
     resumed.run(SerialEvaluator())
     assert resumed.curve() == whole.curve()
     assert (resumed.evaluations, resumed.saved) == (whole.evaluations, whole.saved)
+    assert resumed.state.data == whole.state.data  # the front so far, and what breeding reads
+    if changes:
+        assert whole.curve()[-1]["front_size"] >= 1 and whole.state.data["front"]
 
 
 def test_due_checkpoints_write_every_file(tmp_path: Path) -> None:
