@@ -193,3 +193,30 @@ def test_a_map_elites_run_on_two_rq_workers_builds_the_serial_archive(
         evaluator.close()
     assert on_rq.state.archive.to_json() == serial.state.archive.to_json()
     assert on_rq.curve() == serial.curve() and serial.curve()[-1]["coverage"] > 0
+
+
+def test_nsga2_and_afpo_on_two_rq_workers_give_the_serial_curve_and_front(
+    redis_server, workers
+) -> None:
+    """The front so far, the hypervolume and what each strategy breeds from (objective values,
+    births, AFPO's lineages) do not depend on who simulated the robots, nor in what order."""
+    for name in ("left", "right"):
+        workers.start(name)
+    for name in ("left", "right"):
+        workers.wait_ready(name)
+    evaluator = RQEvaluator(redis_server.url)
+    try:
+        for algorithm in ("nsga2", "afpo"):
+            request = {
+                "preset": "quick", "population": 6, "generations": 3, "seed": 5,
+                "shape": [2, 2, 2], "algorithm": algorithm, "sim": {"duration": 1.0},
+                "objectives": ["speed", "-cost_of_transport"],
+            }  # fmt: skip
+            serial = Evolution.start(resolve(request))
+            serial.run(SerialEvaluator())
+            on_rq = Evolution.start(resolve(request))
+            on_rq.run(evaluator)
+            assert on_rq.curve() == serial.curve() and serial.curve()[-1]["hypervolume"] > 0
+            assert on_rq.state.data == serial.state.data and serial.state.data["front"]
+    finally:
+        evaluator.close()
