@@ -6,7 +6,7 @@ coordinator, the SSE stream) speak to it in plain values, never sessions or ORM 
 * `driving`: the coordinator's reads and writes of a generation.
 """
 
-from softevo.api.store import driving, leases
+from softevo.api.store import births, driving, leases
 from softevo.api.store.runs import (
     ConflictError,
     NotFoundError,
@@ -31,7 +31,7 @@ from softevo.api.store.runs import (
 
 __all__ = [
     "ConflictError", "NotFoundError", "QueueFullError", "RunRecord", "archive", "best_individual",
-    "cancel_run", "create_run", "create_sweep", "curve", "curve_after", "driving",
+    "births", "cancel_run", "create_run", "create_sweep", "curve", "curve_after", "driving",
     "get_individual", "get_run", "get_sweep", "leases", "list_individuals", "list_runs",
     "list_sweeps", "population_points", "progress_counts",
 ]  # fmt: skip

@@ -154,6 +154,12 @@ class Landed:
     worker: str | None
     seconds_each: float | None
     measures: Mapping[int, Mapping[str, float]] = field(default_factory=dict)
+    generation: int | None = None  # its generation, when not the one it is written with
+
+
+#: A member bred by a streaming strategy and not written yet: (generation, index, member as
+#: `keep_generation` takes it).
+Member = tuple[int, int, dict[str, Any]]
 
 
 @dataclass(frozen=True)
@@ -176,6 +182,7 @@ class GenerationCommit:
     done: bool = False
     seconds: float = 0.0
     upcoming: Sequence[dict[str, Any]] = ()
+    members: Sequence[Member] = ()  # a streaming strategy's births not written yet
 
 
 def _fitness_rows(
@@ -184,7 +191,8 @@ def _fitness_rows(
     """Rows for `_SET_FITNESS`: evaluated or failed by the value, unless `status` is given."""
     at = now()
     return [
-        {"b_run": run_id, "b_generation": generation, "b_index": index,
+        {"b_run": run_id, "b_index": index,
+         "b_generation": generation if batch.generation is None else batch.generation,
          "b_fitness": to_null(value), "b_seconds": to_null(batch.seconds_each),
          "b_measures": measures_text(batch.measures.get(index)),
          "b_worker": None if batch.worker is None else batch.worker[:128], "b_at": at,
@@ -213,21 +221,38 @@ _ENCODE = json.JSONEncoder(separators=(",", ":")).encode
 
 def _set_fitness(connection: Connection, rows: list[dict[str, Any]]) -> None:
     """`_SET_FITNESS` for rows, the first of each index only: a later one for the same index
-    would find it no longer pending, as it does in a later call."""
-    first: dict[int, dict[str, Any]] = {}
+    would find it no longer pending, as it does in a later call. One statement a generation."""
+    first: dict[int, dict[int, dict[str, Any]]] = {}
     for row in rows:
-        first.setdefault(row["b_index"], row)
-    _SET_FITNESS.execute(connection, list(first.values()))
+        first.setdefault(row["b_generation"], {}).setdefault(row["b_index"], row)
+    for by_index in first.values():
+        _SET_FITNESS.execute(connection, list(by_index.values()))
 
 
 def save_fitness(
-    db: Database, run_id: int, lease: Lease, generation: int, landed: Sequence[Landed]
+    db: Database,
+    run_id: int,
+    lease: Lease,
+    generation: int,
+    landed: Sequence[Landed],
+    members: Sequence[Member] = (),
 ) -> None:
-    """Batches' fitness, written once per individual, in one transaction."""
+    """Batches' fitness, written once per individual, in one transaction (after the `members`
+    a streaming strategy bred since the last write)."""
     with db.writing() as connection:
         _fence(connection, run_id, lease)
+        _insert_births(connection, run_id, members)
         rows = _fitness_rows(run_id, generation, landed)
         _set_fitness(connection, rows)
+
+
+def _insert_births(connection: Connection, run_id: int, members: Sequence[Member]) -> None:
+    """Members bred one at a time, one statement per generation."""
+    by_generation: dict[int, dict[int, dict[str, Any]]] = {}
+    for generation, index, member in members:
+        by_generation.setdefault(generation, {})[index] = member
+    for generation, by_index in by_generation.items():
+        _insert_members(connection, run_id, generation, by_index)
 
 
 MEMBER_COLUMNS = ("genome", "genome_hash", "operator", "parents")
@@ -253,14 +278,19 @@ _INSERT_MEMBER = DriverStatement(
 
 
 def _insert_members(
-    connection: Connection, run_id: int, generation: int, members: Sequence[dict[str, Any]]
+    connection: Connection,
+    run_id: int,
+    generation: int,
+    members: Sequence[dict[str, Any]] | Mapping[int, dict[str, Any]],
 ) -> None:
+    """Members of one generation: all of them in order, or some by index."""
+    items = members.items() if isinstance(members, Mapping) else enumerate(members)
     _INSERT_MEMBER.execute(
         connection,
         [
             {"b_run": run_id, "b_generation": generation, "b_index": index,
              **{f"b_{column}": member[column] for column in MEMBER_COLUMNS}}
-            for index, member in enumerate(members)
+            for index, member in items
         ],
     )  # fmt: skip
 
@@ -309,6 +339,7 @@ def commit_generation(db: Database, run_id: int, lease: Lease, commit: Generatio
     best = (None, None) if commit.best is None else commit.best
     with db.writing() as connection:
         _fence(connection, run_id, lease)
+        _insert_births(connection, run_id, commit.members)
         rows = _fitness_rows(run_id, generation, commit.landed)
         cached = [Landed(commit.cached, None, None, commit.cached_measures)]
         rows += _fitness_rows(run_id, generation, cached, IndividualStatus.CACHED)

@@ -1,0 +1,33 @@
+"""A streaming strategy's births as a driver finds them when it takes a run over: the members
+bred (and perhaps evaluated) past the last committed generation, read once."""
+
+from __future__ import annotations
+
+from sqlalchemy import select
+
+from softevo.api.db import Database
+from softevo.api.store.driving import _PENDING, INDIVIDUALS
+from softevo.core.nulls import from_null, from_null_record
+
+
+def stored_births(
+    db: Database, run_id: int, since: int
+) -> dict[tuple[int, int], tuple[str, float | None, dict[str, float]]]:
+    """The members stored in generations `since` and later, by (generation, index): genome
+    hash, fitness (None: not evaluated yet; NaN: failed) and record of measures. A streaming
+    strategy's births in flight, read once when a driver takes the run over."""
+    columns = INDIVIDUALS.c
+    with db.read() as session:
+        rows = session.execute(
+            select(columns.generation, columns["index"], columns.genome_hash, columns.status,
+                   columns.fitness, columns.measures)
+            .where(columns.run_id == run_id, columns.generation >= since)
+        ).all()  # fmt: skip
+    return {
+        (row.generation, row.index): (
+            row.genome_hash,
+            None if row.status == _PENDING else from_null(row.fitness),
+            {} if row.status == _PENDING else from_null_record(row.measures),
+        )
+        for row in rows
+    }
