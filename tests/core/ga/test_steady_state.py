@@ -3,6 +3,7 @@ timing, a stop and a resume; the window bounds what is in flight."""
 
 from __future__ import annotations
 
+import itertools
 import random
 import threading
 import time
@@ -99,7 +100,7 @@ def test_a_stop_and_resume_from_the_stored_state_goes_on_to_the_same_run() -> No
 def test_births_name_their_parents_by_birth_and_the_best_never_falls() -> None:
     evolution = _run(SerialEvaluator(), {**REQUEST, "generations": 6})
     curve = evolution.curve()
-    assert all(a["best_so_far"] <= b["best_so_far"] for a, b in zip(curve, curve[1:]))
+    assert all(a["best_so_far"] <= b["best_so_far"] for a, b in itertools.pairwise(curve))
     kept = evolution.state.data[KEY]
     assert kept["told"] == 8 * 6 and kept["window"] == []
     assert len(kept["births"]) == 8 and max(kept["births"]) < 8 * 6
@@ -131,5 +132,7 @@ def test_a_steady_state_map_elites_draws_parents_from_the_archive() -> None:
 def test_bad_options_are_refused_by_name(
     options: dict[str, Any], extra: dict[str, Any], message: str
 ) -> None:
-    with pytest.raises((ConfigError, ValueError), match=message.replace("(", r"\(").replace(")", r"\)")):
+    with pytest.raises(
+        (ConfigError, ValueError), match=message.replace("(", r"\(").replace(")", r"\)")
+    ):
         resolve({**REQUEST, "options": options, **extra})
