@@ -13,7 +13,8 @@ wall (1.0: nothing but simulation). Paths:
   database (every individual that was simulated, not those from the cache);
 * `service-rq`: the same with a private redis-server and two `softevo worker` processes.
 
-Workloads: `paper-voxel` (4x4x4, seed 1, 25 x G generations, 100 by default), `sweep` (the
+Workloads: `paper-voxel` (4x4x4, seed 1, 25 x G generations, 100 by default), `steady-voxel`
+and `steady-cube` (`paper-voxel` and `paper-cube` as `steady-state` runs), `sweep` (the
 paper's nine boxes x seeds 1-3 as one `POST /sweeps`, G generations each; `run` path: the 27 runs
 one after another), `paper-cube` (the 28-spring cube, 30 x G, 1000 by default), `seeds` (one
 box, 4x4x4, seeds 1-6 as one sweep, G generations, 40 by default: runs whose robots can share
@@ -71,6 +72,10 @@ def workload(name: str, generations: int | None) -> list[dict[str, Any]]:
         return [{"preset": "paper-voxel", "seed": 1, "generations": generations or 100}]
     if name == "paper-cube":
         return [{"preset": "paper-cube", "seed": 1, "generations": generations or 1000}]
+    if name in ("steady-voxel", "steady-cube"):  # the same settings, steady-state (issue 37)
+        preset = "paper-voxel" if name == "steady-voxel" else "paper-cube"
+        request = workload(preset, generations)[0]
+        return [{**request, "algorithm": "steady-state"}]
     if name == "seeds":
         return [
             {
@@ -325,8 +330,10 @@ def main() -> None:
             files = [file for members in generations for file in members]
             physics = math.nan if args.no_bound else bound(files)
             # one run at a time: several runs' generations overlap, so theirs add up to no bound
-            barrier = (
-                math.nan if args.no_bound or len(requests) > 1 else generation_bound(generations)
+            barrier = (  # (a steady-state run has no generation barrier)
+                math.nan
+                if args.no_bound or len(requests) > 1 or name.startswith("steady")
+                else generation_bound(generations)
             )
             print(f"{name:12} {path:12} {len(files):11d} {wall:11.1f} {physics:11.1f} "
                   f"{physics / wall:12.2f} {barrier:22.1f} {physics / barrier:24.2f} "
