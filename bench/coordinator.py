@@ -154,6 +154,7 @@ ALGORITHMS: dict[str, dict[str, Any]] = {
     },
     "nsga2": {"algorithm": "nsga2", "objectives": ["speed", "-cost_of_transport"]},
     "afpo": {"algorithm": "afpo", "objectives": ["speed", "-cost_of_transport"]},
+    "steady-state": {"algorithm": "steady-state"},  # per birth: P births make a generation
 }
 
 #: `--population` (the paper's 25 unless given), read by `drive` in every fresh interpreter.
@@ -255,7 +256,9 @@ def main() -> None:
     )  # fmt: skip
     parser.add_argument("--tree", help="also measure the checkout at this path, interleaved")
     parser.add_argument(
-        "--algorithms", default="ga", help="comma-separated: ga (default), map-elites, nsga2, afpo"
+        "--algorithms",
+        default="ga",
+        help="comma-separated: ga (default), map-elites, nsga2, afpo, steady-state",
     )
     parser.add_argument(
         "--population", type=int, help="individuals per generation (25, the paper's)"

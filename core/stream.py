@@ -43,9 +43,14 @@ class Flights:
     batches: int = 0  # batches sent and not landed
     landings: queue.SimpleQueue[Landing] = field(default_factory=queue.SimpleQueue)
 
-    def free(self) -> int:
-        """Batches that may go out now: at most `in_flight`, and two per worker."""
-        return max(0, min(self.in_flight, 2 * self.evaluator.capacity()) - self.batches)
+    def free(self, waiting: int) -> bool:
+        """Whether a batch of the `waiting` robots may go out now: while a worker is idle, any
+        batch; a second one per worker (there when the first lands) only a full one, so robots
+        wait to share a call rather than each pay one; never more than `in_flight`."""
+        workers = self.evaluator.capacity()
+        if self.batches >= min(self.in_flight, 2 * workers):
+            return False
+        return self.batches < workers or waiting >= self.batch_size
 
     def send(self, births: list[Birth], files: list[dict[str, Any]], key: str) -> None:
         names = [birth.individual.genome.hash for birth in births]
@@ -91,6 +96,8 @@ class _Row:
         """New births: kept by the hooks (which may know their fitness, after a takeover), and
         queued to go out unless an earlier birth has their genome."""
         population = self.engine.algorithm.config.population
+        total = population * self.engine.algorithm.config.generations
+        births = [birth for birth in births if birth.number < total]  # past the end: never sent
         rows: dict[int, dict[int, Birth]] = {}
         for birth in births:
             rows.setdefault(birth.number // population, {})[birth.number % population] = birth
@@ -105,7 +112,7 @@ class _Row:
 
     def send(self, flights: Flights) -> None:
         """Fill free slots with the waiting births (up to a batch each)."""
-        while self.waiting and flights.free():
+        while self.waiting and flights.free(len(self.waiting)):
             births: list[Birth] = []
             while self.waiting and len(births) < flights.batch_size:
                 birth = self.waiting.popleft()
@@ -189,6 +196,4 @@ def _tell_known(row: _Row) -> None:
         genome_hash = nursery.window[0].individual.genome.hash
         if genome_hash not in cache:
             return
-        new = nursery.tell(cache[genome_hash], row.measures.get(genome_hash, {}), cache)
-        if new is not None:
-            row.keep([new])
+        row.keep([nursery.tell(cache[genome_hash], row.measures.get(genome_hash, {}), cache)])

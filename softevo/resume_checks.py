@@ -17,7 +17,8 @@ from typing import Any
 
 from softevo.core.config import ConfigError, RunConfig, resolve
 from softevo.core.encodings import Encoding, EncodingError
-from softevo.core.ga.state import GAState
+from softevo.core.ga.registry import strategy_class
+from softevo.core.ga.state import GAState, Individual
 from softevo.core.genome import Genome
 
 
@@ -168,6 +169,8 @@ def _check_state(config: RunConfig, state: GAState, raw: dict[str, Any]) -> None
         raise ResumeError(f"state.json: previous is null at generation {state.generation}")
     encoding = config.make_encoding()
     size = config.population
+    streaming = strategy_class(config.algorithm).streaming
+    bound = size * state.generation if streaming else size  # parents: births, or indices
     for name in ("current", "previous"):
         items = getattr(state, name)
         if items is None:
@@ -177,9 +180,12 @@ def _check_state(config: RunConfig, state: GAState, raw: dict[str, Any]) -> None
                               f"config.json's population is {size}")  # fmt: skip
         for i, item in enumerate(items):
             _check_genome(encoding, item.genome, f"state.json: {name}[{i}].genome")
-            if any(parent >= size for parent in item.parents):
+            if any(parent >= bound for parent in item.parents):
+                what = f"{bound} births told" if streaming else f"a generation of {size}"
                 raise ResumeError(f"state.json: {name}[{i}].parents: {list(item.parents)} "
-                                  f"indexes past a generation of {size}")  # fmt: skip
+                                  f"indexes past {what}")  # fmt: skip
+    if streaming:
+        _check_births(config, encoding, state)
     fitness = state.previous_fitness
     if state.previous is not None and (fitness is None or len(fitness) != len(state.previous)):
         count = "none" if fitness is None else len(fitness)
@@ -192,6 +198,32 @@ def _check_state(config: RunConfig, state: GAState, raw: dict[str, Any]) -> None
     if len(raw.get("history", [])) not in (0, state.generation):
         raise ResumeError(f"state.json: history holds {len(raw['history'])} generations, "
                           f"the state is at generation {state.generation}")  # fmt: skip
+
+
+def _check_births(config: RunConfig, encoding: Encoding, state: GAState) -> None:
+    """A steady-state run's births: as many told as its generations hold, a birth number per
+    member, and the window of births in flight after them, each a genome of the encoding."""
+    kept = (state.data or {}).get("steady")
+    if state.generation == 0 and kept is None:
+        return
+    told = config.population * state.generation
+    _expect(isinstance(kept, dict) and kept.get("told") == told, "state.json: data.steady.told",
+            f"{told} (the births of {state.generation} generations)",
+            kept.get("told") if isinstance(kept, dict) else kept)  # fmt: skip
+    births = kept.get("births")
+    _expect(isinstance(births, list) and len(births) == len(state.previous or [])
+            and all(_is_int(n) and 0 <= n < told for n in births), "state.json: data.steady.births",
+            f"a birth number below {told} per member", births)  # fmt: skip
+    window = kept.get("window")
+    _expect(isinstance(window, list) and len(window) <= config.population,
+            "state.json: data.steady.window", "a list of births", window)  # fmt: skip
+    for i, item in enumerate(window):
+        where = f"state.json: data.steady.window[{i}]"
+        _expect(isinstance(item, dict) and item.get("n") == told + i
+                and isinstance(item.get("saved"), bool), where,
+                f"birth {told + i} with saved true or false", item)  # fmt: skip
+        _check_individual_json(item, where)
+        _check_genome(encoding, Individual.from_json(item).genome, f"{where}.genome")
 
 
 def _check_genome(encoding: Encoding, genome: Genome, where: str) -> None:

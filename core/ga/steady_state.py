@@ -129,10 +129,14 @@ class SteadyState(Strategy):
     def nursery(self, state: GAState, cache: Any = ()) -> Nursery:
         """The working copy of `state` the step tells births to; `cache` (genome hashes
         evaluated before) marks the first births of a new run that repeat a genome."""
+        last = self.__dict__.get("_last")
+        if last is not None and last.following is state:  # the state its last row gave
+            last.state, last.row, last.following = state, [], None
+            return last
         kept = (state.data or {}).get(KEY)
         if kept is None:  # a new run: births 0 .. W-1, random
             nursery = Nursery(self, state, [], [], [], 0, deque())
-            for number in range(min(self.window, self.total)):
+            for number in range(self.window):
                 nursery.add(number, self._random(state.seed, number), cache)
             return nursery
         window = deque(Birth.from_json(item) for item in kept["window"])
@@ -182,6 +186,7 @@ class Nursery:
     window: deque[Birth]
     row: list[tuple[Individual, float, dict[str, float], bool]] = field(default_factory=list)
     hashes: Counter[str] = field(default_factory=Counter)  # of the window's genomes
+    following: GAState | None = None  # the state `finish` gave
 
     def __post_init__(self) -> None:
         self.hashes.update(birth.individual.genome.hash for birth in self.window)
@@ -204,9 +209,11 @@ class Nursery:
         self.hashes[genome_hash] += 1
         return birth
 
-    def tell(self, fitness: float, record: dict[str, float], cache: Any) -> Birth | None:
+    def tell(self, fitness: float, record: dict[str, float], cache: Any) -> Birth:
         """The oldest birth in flight scored `fitness`: it joins the population (or not), and
-        the birth W later is bred; returns that one (None past the run's last birth)."""
+        the birth W later is bred and returned. It is bred past the run's last birth too (the
+        step never sends those), so a run resumed with more generations has the births an
+        uninterrupted longer run had."""
         birth = self.window.popleft()
         genome_hash = birth.individual.genome.hash
         self.hashes[genome_hash] -= 1
@@ -221,8 +228,6 @@ class Nursery:
             )
         self.told += 1
         number = self.told - 1 + self.strategy.window
-        if number >= self.strategy.total:
-            return None
         return self.add(number, self.strategy.bred(self, number), cache)
 
     def _replace(self, birth: Birth, fitness: float) -> None:
@@ -261,4 +266,6 @@ class Nursery:
         state = replace(
             told, previous=list(self.population), previous_fitness=list(self.fitness), data=data
         )
+        self.following = state  # the next row goes on from this working copy, not from JSON
+        self.strategy.__dict__["_last"] = self
         return state, stats

@@ -102,7 +102,7 @@ def test_births_name_their_parents_by_birth_and_the_best_never_falls() -> None:
     curve = evolution.curve()
     assert all(a["best_so_far"] <= b["best_so_far"] for a, b in itertools.pairwise(curve))
     kept = evolution.state.data[KEY]
-    assert kept["told"] == 8 * 6 and kept["window"] == []
+    assert kept["told"] == 8 * 6 and [item["n"] for item in kept["window"]] == [48, 49, 50, 51]
     assert len(kept["births"]) == 8 and max(kept["births"]) < 8 * 6
     population = np.asarray(evolution.state.previous_fitness)
     assert np.nanmax(population) == curve[-1]["best_so_far"]
