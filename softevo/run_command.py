@@ -103,7 +103,9 @@ def _search_arguments(run: argparse.ArgumentParser) -> None:
         help="the search strategy: ga (the preset's), random or hillclimb (baselines), "
         "map-elites (quality-diversity over --descriptors, by default the map-elites "
         "preset's voxels,actuated x 8,8: writes archive.csv, archive.json and the archive.png "
-        "heat map), or any other installed one (softevo algorithms)",
+        "heat map), nsga2 or afpo (several --objectives), steady-state (no generation "
+        "barrier: births told in birth order, --options '{\"window\": W}'), or any other "
+        "installed one (softevo algorithms)",
     )  # fmt: skip
     run.add_argument(
         "--options", type=options_json, metavar="JSON",

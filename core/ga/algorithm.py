@@ -46,7 +46,8 @@ class GAConfig(BaseModel):
         description="the search strategy, by name: one installed in the entry-point group "
         "`softevo.strategies` (built in: ga, the paper's genetic algorithm; random, random "
         "search; hillclimb, a (1+lambda) hill climber; map-elites, quality-diversity; "
-        "nsga2, NSGA-II; afpo, age-fitness Pareto optimisation). "
+        "nsga2, NSGA-II; afpo, age-fitness Pareto optimisation; steady-state, asynchronous "
+        "evolution told in birth order). "
         "GET /algorithms lists those installed, with the settings each one reads.",
     )
     options: dict[str, Any] = Field(
