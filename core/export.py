@@ -16,18 +16,11 @@ from typing import Any
 import numpy as np
 
 from softevo.core.lattice import Lattice, LatticeError, build_lattice
-from softevo.core.robot import LABELS, Robot, VoxelRobot
+from softevo.core.robot import COLOURS, LABELS, Robot, VoxelRobot
+from softevo.core.vxa import VxaError, to_vxa
 
 FORMATS = ("vxa", "glb", "stl")
 MEDIA_TYPES = {"vxa": "application/xml", "glb": "model/gltf-binary", "stl": "model/stl"}
-#: Display colours (sRGB, 0..255) of the materials: the dashboard's replay colours.
-COLOURS = {
-    "soft": (0x9B, 0xC5, 0x9D),
-    "hard": (0x4A, 0x4F, 0x55),
-    "sine": (0xD1, 0x49, 0x5B),
-    "neg_sine": (0x2F, 0x6F, 0xB5),
-    "filled": (0xB8, 0xC2, 0xCC),  # robots whose springs, not voxels, carry the materials
-}
 #: glTF is +Y up, softevo +Z up: (x, y, z) -> (x, z, -y), a rotation (no mirror).
 Z_UP_TO_Y_UP = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
 
@@ -164,9 +157,11 @@ def to_glb(robot: Robot) -> bytes:
 def export_robot(robot: Robot, format: str) -> bytes:
     """The robot written in `format` (one of FORMATS), as the bytes of the file."""
     if format == "vxa":
-        from softevo.core.vxa import to_vxa
-
-        return to_vxa(robot, voxel_grid(robot))
+        grid = voxel_grid(robot)
+        try:
+            return to_vxa(robot, grid)
+        except VxaError as error:  # the writer's refusal, said as every format's is
+            raise ExportError(str(error)) from None
     if format == "glb":
         return to_glb(robot)
     if format == "stl":

@@ -18,14 +18,14 @@ from typing import Any
 
 import numpy as np
 
-from softevo.core.export import COLOURS, mass_faces
+from softevo.core.export import mass_faces
 from softevo.core.limits import (
     MAX_PICTURE_FPS,
     MAX_PICTURE_SECONDS,
     MAX_REPLAY_POSITIONS,
     MIN_PICTURE_FPS,
 )
-from softevo.core.robot import ACTUATED_LABELS, Robot, VoxelRobot, build_mechanics
+from softevo.core.robot import ACTUATED_LABELS, COLOURS, Robot, VoxelRobot, build_mechanics
 
 PICTURE_FORMATS = ("gif", "mp4")
 MEDIA_TYPES = {"gif": "image/gif", "mp4": "video/mp4", "png": "image/png"}

@@ -32,6 +32,15 @@ from softevo.core.terrain import start_shift
 
 LABELS = ("empty", "soft", "hard", "sine", "neg_sine")
 ACTUATED_LABELS = ("sine", "neg_sine")
+#: Display colours (sRGB, 0..255) of the materials, the same in every picture, replay and export
+#: (the dashboard's replay colours); "filled" for robots whose springs carry the materials.
+COLOURS = {
+    "soft": (0x9B, 0xC5, 0x9D),
+    "hard": (0x4A, 0x4F, 0x55),
+    "sine": (0xD1, 0x49, 0x5B),
+    "neg_sine": (0x2F, 0x6F, 0xB5),
+    "filled": (0xB8, 0xC2, 0xCC),
+}
 #: Bounds of the paper's phase 3 actuation genes.
 GENE_BOUNDS = {"a": (-1.0, 1.0), "b": (-math.pi / 2, math.pi / 2), "c": (-2 * math.pi, 2 * math.pi)}
 

@@ -30,8 +30,7 @@ from xml.sax.saxutils import escape
 
 import numpy as np
 
-from softevo.core.export import COLOURS, ExportError
-from softevo.core.robot import ACTUATED_LABELS, Robot, VoxelRobot
+from softevo.core.robot import ACTUATED_LABELS, COLOURS, Robot, VoxelRobot
 from softevo.core.settings import SimSettings
 from softevo.core.vxa_layers import (
     VoxelActuation,
@@ -277,11 +276,16 @@ def _lifted(grid: np.ndarray, below: int) -> np.ndarray:
     return np.pad(grid, ((0, 0), (0, 0), (below, 0)), constant_values=fill)
 
 
+class VxaError(ValueError):
+    """A robot that a VXA cannot express; the message is one line (`export_robot` says it as
+    an `ExportError`, as `voxel_grid` says a `LatticeError`)."""
+
+
 def to_vxa(robot: Robot, grid: np.ndarray) -> bytes:
     """`robot` (its simulated voxels `grid`, see softevo.core.export.voxel_grid) as a VXA that
     evosoro's Voxelyze runs as it is, writing its fitness file (docs/export.md)."""
     if not isinstance(robot, VoxelRobot):
-        raise ExportError(
+        raise VxaError(
             "vxa needs a robot of voxel materials (soft, hard, sine, neg_sine): this robot's "
             "springs carry their own materials, which Voxelyze cannot express (use glb or stl)"
         )
@@ -293,7 +297,7 @@ def to_vxa(robot: Robot, grid: np.ndarray) -> bytes:
     voxel_mass = table["soft"]["Density"] * sim.edge_length**3
     below = drop_layers(robot)
     if below > MAX_DROP_LAYERS:
-        raise ExportError(
+        raise VxaError(
             f"vxa: sim.drop_height {_number(sim.drop_height)} m is {below} edge lengths, written "
             f"as that many empty layers under the robot: more than {MAX_DROP_LAYERS}"
         )

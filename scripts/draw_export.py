@@ -11,7 +11,8 @@ import trimesh
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from softevo.core import figures
-from softevo.core.export import COLOURS, Z_UP_TO_Y_UP, export_robot
+from softevo.core.export import Z_UP_TO_Y_UP, export_robot
+from softevo.core.robot import COLOURS
 from softevo.core.robot_file import load_robot
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -15,7 +15,6 @@ import pytest
 import trimesh
 
 from softevo.core.export import (
-    COLOURS,
     FORMATS,
     Z_UP_TO_Y_UP,
     ExportError,
@@ -26,7 +25,7 @@ from softevo.core.export import (
     voxel_grid,
 )
 from softevo.core.lattice import build_lattice
-from softevo.core.robot import Actuation, VoxelRobot, build_mechanics
+from softevo.core.robot import COLOURS, Actuation, VoxelRobot, build_mechanics
 from softevo.core.robot_file import load_robot
 from softevo.core.settings import sim_settings
 
