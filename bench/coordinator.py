@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import atexit
+import gc
 import importlib
 import json
 import os
@@ -178,6 +179,7 @@ def drive(
     STAND_IN_CPU[0] = 0.0
     cpu, wall = time.process_time(), time.perf_counter()
     coordinator.start()
+    gc.freeze()  # as the service does once the coordinator has started (`api.app`, both trees)
     if hasattr(coordinator, "join"):  # wait on the driver thread: no polling in the measurement
         active = ("queued", "running")
         while (

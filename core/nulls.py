@@ -33,8 +33,19 @@ def to_null_record(record: Mapping[str, float]) -> dict[str, float | None]:
     return {name: value if math.isfinite(value) else None for name, value in record.items()}
 
 
+class Record(dict[str, float]):
+    """A record of measures read from JSON (name -> value, NaN for null) that keeps the JSON text
+    the store writes of it, once made (`text`): a genome met again (a survivor, a copy) has its
+    record written with every generation it is a member of, and it is this same object each
+    time. A record is never changed once read."""
+
+    __slots__ = ("text",)
+
+
 def from_null_record(record: Mapping[str, float | None] | None) -> dict[str, float]:
     """A record of measures as JSON kept it, None as NaN (a missing record: empty)."""
     if not record:
         return {}
-    return {name: math.nan if value is None else float(value) for name, value in record.items()}
+    return Record(
+        {name: math.nan if value is None else float(value) for name, value in record.items()}
+    )

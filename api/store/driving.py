@@ -21,7 +21,7 @@ from softevo.api.models import Generation, Individual, Run
 from softevo.api.store import leases
 from softevo.api.store.runs import now
 from softevo.api.store.statements import DriverStatement
-from softevo.core.nulls import from_null, from_null_record, to_null, to_null_record
+from softevo.core.nulls import Record, from_null, from_null_record, to_null, to_null_record
 from softevo.core.status import IndividualStatus, RunStatus
 
 CURVE_FIELDS = (
@@ -205,14 +205,21 @@ def _fitness_rows(
 
 def measures_text(record: Mapping[str, float] | None) -> EncodedJSON:
     """A record of measures as `individuals.measures` stores it: a compact JSON object, NaN as
-    null. Encoded once per robot by the coordinator, so NaN is replaced in the text (a measure's
+    null. Encoded once per record by the coordinator (a `Record` keeps its text for the
+    generations its genome is a member of again), and NaN is replaced in the text (a measure's
     name, an identifier, never holds it) rather than in a copy of the record first."""
     if not record:
         return EncodedJSON("{}")
+    known = getattr(record, "text", None)  # a `Record` written before (a cached genome's)
+    if known is not None:
+        return known
     text = _ENCODE(record)
     if "Infinity" in text:  # not a number JSON knows either: the slow, exact way
-        return EncodedJSON(_ENCODE(to_null_record(record)))
-    return EncodedJSON(text.replace("NaN", "null"))
+        text = _ENCODE(to_null_record(record))
+    encoded = EncodedJSON(text.replace("NaN", "null"))
+    if isinstance(record, Record):
+        record.text = encoded
+    return encoded
 
 
 #: One encoder for every record (`json.dumps` with options builds one per call).
