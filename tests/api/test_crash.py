@@ -37,6 +37,15 @@ REQUEST: dict[str, Any] = {
 #: kill are read back, not measured again).
 QD_REQUEST = {**REQUEST, "algorithm": "map-elites", "descriptors": ["heading", "actuated"],
               "bins": [8, 5]}  # fmt: skip
+#: The same run as steady-state: births kept as they are bred, rows of 16 births; the births in
+#: flight at the kill are bred again by the successor, which finds those saved before it. (It
+#: simulates every birth, twice the GA's robots: each half as long.)
+STEADY_REQUEST = {
+    **REQUEST,
+    "algorithm": "steady-state",
+    "options": {"window": 8},
+    "sim": {"duration": 10.0},
+}
 GENERATIONS = REQUEST["generations"]
 POPULATION = REQUEST["population"]
 #: The server is killed in the first generation from KILL_AT on caught half evaluated; the last
@@ -164,7 +173,9 @@ def _saved_fitness(engine: Engine, run_id: int, generation: int) -> list[tuple[A
 
 @pytest.mark.slow
 @pytest.mark.fault
-@pytest.mark.parametrize("request_body", [REQUEST, QD_REQUEST], ids=["ga", "map-elites"])
+@pytest.mark.parametrize(
+    "request_body", [REQUEST, QD_REQUEST, STEADY_REQUEST], ids=["ga", "map-elites", "steady-state"]
+)
 def test_sigkill_mid_generation_then_restart_resumes_with_the_same_curve(
     start_server: Callable[[], Server], engine: Engine, request_body: dict[str, Any]
 ) -> None:
