@@ -238,10 +238,11 @@ class Nursery:
             return
         if math.isnan(fitness):
             return
-        values = np.asarray(self.fitness, dtype=np.float64)
-        key = np.where(np.isnan(values), -np.inf, values)
-        worst = min(range(len(key)), key=lambda i: (key[i], self.births[i]))
-        if fitness > key[worst]:
+        ranks = [(-math.inf if math.isnan(value) else value, birth)
+                 for value, birth in zip(self.fitness, self.births, strict=True)]  # fmt: skip
+        lowest = min(ranks)  # the worst fitness; of equals, the oldest birth
+        worst = ranks.index(lowest)
+        if fitness > lowest[0]:
             self.population[worst] = birth.individual
             self.fitness[worst] = fitness
             self.births[worst] = birth.number
