@@ -6,7 +6,9 @@ coordinator adds persistence through `Hooks`, never a second copy of the loop, s
 plugs in once and runs everywhere. Counting is the same for both: a genome seen in an earlier
 generation of the run is not simulated again (`saved`); within a generation, each distinct new
 genome is simulated once (`evaluations`), and one whose fitness a hook already holds (saved
-before a crash) is counted as evaluated but not simulated again.
+before a crash) is counted as evaluated but not simulated again. A streaming strategy
+(`steady-state`) is told one birth at a time instead, its births streamed to the evaluator
+(`softevo.core.stream`); its step still ends with one curve row, through the same hooks.
 """
 
 from __future__ import annotations
