@@ -28,7 +28,7 @@ from softevo.api.coordinator import Coordinator
 from softevo.api.db import Database, alembic_config, current_revision
 from softevo.api.events import TooManyClientsError, Watches
 from softevo.api.read_token import ReadTokenMiddleware
-from softevo.api.routes import archive, front, meta, runs, sweeps, views
+from softevo.api.routes import meta, runs, sweeps
 from softevo.api.settings import Settings, get_settings
 from softevo.api.validation import RequestError, point_to_sim
 from softevo.core.evaluator import Evaluator
@@ -125,7 +125,7 @@ def create_app(
         redoc_url=None,  # ReDoc loads its script from a CDN
     )
     _install_middleware(app, settings)
-    for module in (runs, archive, front, views, sweeps, meta):
+    for module in (runs, sweeps, meta):
         app.include_router(module.router)
     dashboard.install(app)
     _install_error_handlers(app)

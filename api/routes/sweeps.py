@@ -11,7 +11,7 @@ from fastapi import APIRouter, Body, Path, Query, Response, status
 from softevo.api import store
 from softevo.api.db import Database
 from softevo.api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TokenDep
-from softevo.api.routes.runs import BAD_BODY
+from softevo.api.routes.runs.lifecycle import BAD_BODY
 from softevo.api.schemas import Message, SweepBox, SweepCreate, SweepPage, SweepPublic
 from softevo.api.validation import RequestError, check_budget, run_config
 from softevo.core.status import RunStatus

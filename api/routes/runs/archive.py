@@ -4,18 +4,17 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Query
+from fastapi import Query
 
 from softevo.api import store
 from softevo.api.deps import DatabaseDep
-from softevo.api.routes.runs import NOT_FOUND, RunId
+from softevo.api.routes.runs import router
+from softevo.api.routes.runs.lifecycle import NOT_FOUND, RunId
 from softevo.api.schemas import ArchiveCell, ArchivePublic, DescriptorAxis
 from softevo.core.config import RunConfig
 from softevo.core.ga.archive import Archive
 from softevo.core.ga.descriptors import CATALOGUE
 from softevo.core.robot_file import robot_to_json
-
-router = APIRouter(prefix="/runs", tags=["runs"])
 
 
 @router.get("/{run_id}/archive", responses=NOT_FOUND)

@@ -12,19 +12,18 @@ import io
 import threading
 from typing import Annotated, Any, Literal
 
-from fastapi import APIRouter, Path, Query, Request, Response
+from fastapi import Path, Query, Request, Response
 
 from softevo.api import pictures, store
 from softevo.api.deps import DatabaseDep
 from softevo.api.replay import client_address, replay_response
-from softevo.api.routes.runs import NOT_FOUND, RunId, best_robot
+from softevo.api.routes.runs import router
+from softevo.api.routes.runs.lifecycle import NOT_FOUND, RunId, best_robot
 from softevo.api.schemas import Message
 from softevo.core.config import RunConfig
 from softevo.core.genome import Genome
 from softevo.core.limits import MIN_PICTURE_FPS, SERVICE_PICTURE_FPS, SERVICE_PICTURE_SECONDS
 from softevo.core.picture import FPS, MEDIA_TYPES, SECONDS
-
-router = APIRouter(prefix="/runs", tags=["runs"])
 
 #: pyplot keeps global state (its figure registry, rcParams): one figure at a time in this process
 _FIGURES = threading.Lock()

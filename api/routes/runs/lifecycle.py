@@ -7,7 +7,7 @@ import io
 import re
 from typing import Annotated, Any, Literal
 
-from fastapi import APIRouter, Body, Path, Query, Request, Response, status
+from fastapi import Body, Path, Query, Request, Response, status
 from fastapi.responses import StreamingResponse
 
 from softevo.api import store
@@ -17,6 +17,7 @@ from softevo.api.events import event_stream
 from softevo.api.export import FILE_CONTENT, FormatQuery, file_response
 from softevo.api.replay import client_address, replay_response
 from softevo.api.routes.meta import idle_workers
+from softevo.api.routes.runs import router
 from softevo.api.schemas import (
     Curve,
     IndividualDetail,
@@ -34,7 +35,6 @@ from softevo.core.genome import Genome
 from softevo.core.robot_file import robot_to_json
 from softevo.core.status import IndividualStatus, RunStatus
 
-router = APIRouter(prefix="/runs", tags=["runs"])
 RunId = Annotated[int, Path(ge=1, le=2**31 - 1, description="run id")]
 NOT_FOUND: dict[int | str, dict[str, Any]] = {404: {"model": Message}}
 #: FastAPI answers 400 to a body it cannot decode (not UTF-8); invalid JSON text is a 422.

@@ -5,19 +5,18 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Query
+from fastapi import Query
 
 from softevo.api import store
 from softevo.api.deps import DatabaseDep
-from softevo.api.routes.runs import NOT_FOUND, RunId
+from softevo.api.routes.runs import router
+from softevo.api.routes.runs.lifecycle import NOT_FOUND, RunId
 from softevo.api.schemas import FrontPoint, FrontPublic
 from softevo.api.store import front as front_store
 from softevo.core.config import RunConfig
 from softevo.core.front import front_rows
 from softevo.core.genome import Genome
 from softevo.core.robot_file import robot_to_json
-
-router = APIRouter(prefix="/runs", tags=["runs"])
 
 
 @router.get("/{run_id}/front", responses=NOT_FOUND)
