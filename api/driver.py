@@ -30,7 +30,7 @@ from softevo.core.config import RunConfig
 from softevo.core.evaluator import BatchResult, Evaluator
 from softevo.core.ga.algorithm import GAState, Individual, make_strategy
 from softevo.core.ga.state import parents_text
-from softevo.core.generation import Engine, Hooks, Step
+from softevo.core.generation import Hooks, Step, Stepper
 from softevo.core.status import RunStatus
 
 log = logging.getLogger("softevo.coordinator")
@@ -206,7 +206,7 @@ class RunDriver(Hooks):
         stored_config, stored_state = store.driving.load(self.db, self.run_id)
         config = RunConfig.model_validate(stored_config)
         algorithm = make_strategy(config.ga_config(), config.make_encoding())
-        engine = Engine(
+        stepper = Stepper(
             algorithm, config.sim, self.driving.batch_size, self.driving.in_flight, config.objective
         )
         state = GAState.from_json(stored_state) if stored_state else algorithm.start(config.seed)
@@ -214,7 +214,7 @@ class RunDriver(Hooks):
         while not algorithm.done(state):
             self.check()
             self.generation = state.generation
-            step = engine.step(state, cache, self.driving.evaluator, self, self.key, measures)
+            step = stepper.step(state, cache, self.driving.evaluator, self, self.key, measures)
             state = step.state
             upcoming: list[Individual] = []
             done = algorithm.done(state)

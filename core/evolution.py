@@ -17,7 +17,7 @@ from softevo.core.config import RunConfig
 from softevo.core.evaluator import Evaluator
 from softevo.core.ga.algorithm import GAState, Individual, Strategy, make_strategy
 from softevo.core.ga.stats import CURVE_COLUMNS, GenerationStats, curve_columns  # noqa: F401
-from softevo.core.generation import Engine
+from softevo.core.generation import Stepper
 from softevo.core.robot import Robot
 
 
@@ -38,11 +38,11 @@ class Progress:
 
 @dataclass
 class Evolution:
-    """A run in progress in this process: its engine, state, fitness cache (and each genome's
+    """A run in progress in this process: its stepper, state, fitness cache (and each genome's
     record of measures beside it) and counters."""
 
     config: RunConfig
-    engine: Engine
+    stepper: Stepper
     state: GAState
     cache: dict[str, float] = field(default_factory=dict)
     measures: dict[str, dict[str, float]] = field(default_factory=dict)
@@ -55,7 +55,7 @@ class Evolution:
         algorithm = make_strategy(config.ga_config(), config.make_encoding())
         return cls(
             config=config,
-            engine=Engine(algorithm, config.sim, objective=config.objective),
+            stepper=Stepper(algorithm, config.sim, objective=config.objective),
             state=algorithm.start(config.seed),
         )
 
@@ -85,7 +85,7 @@ class Evolution:
 
     @property
     def algorithm(self) -> Strategy:
-        return self.engine.algorithm
+        return self.stepper.algorithm
 
     @property
     def done(self) -> bool:
@@ -101,7 +101,7 @@ class Evolution:
     def step(self, evaluator: Evaluator) -> GenerationStats:
         """Evaluate and tell one generation (the one generation step of
         `softevo.core.generation`)."""
-        step = self.engine.step(self.state, self.cache, evaluator, measures=self.measures)
+        step = self.stepper.step(self.state, self.cache, evaluator, measures=self.measures)
         self.state = step.state
         self.evaluations += step.stats.evaluations
         self.saved += step.stats.saved

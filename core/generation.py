@@ -83,8 +83,10 @@ class Step:
 
 
 @dataclass(frozen=True)
-class Engine:
-    """An algorithm with the encoding and simulation settings of one run, and how it evaluates:
+class Stepper:
+    """What runs the generation step for one run (named apart from the database's engine and
+    the workers' physics fingerprint): an algorithm with the run's encoding and simulation
+    settings, and how it evaluates:
     batches of at most `batch_size` robots, at most `in_flight` of them at once, each robot's
     fitness measured by `objective`."""
 

@@ -1,7 +1,7 @@
 """The generation step of a streaming strategy (`steady-state`): births go out as worker slots
 free and are told in birth order, so no core waits at a generation barrier.
 
-`Engine.step` runs it for a strategy with `streaming`; a step still ends with one curve row
+`Stepper.step` runs it for a strategy with `streaming`; a step still ends with one curve row
 (every `population` births), but the births in flight at its end stay in flight (`Flights`,
 which outlives the step) and the next step takes their results. Births whose genome an earlier
 birth had are not simulated again. Robots waiting to go out are sent together, up to the
@@ -24,7 +24,7 @@ from softevo.core.evaluator import CHECK_SECONDS, BatchResult, Evaluator, hand_o
 if TYPE_CHECKING:
     from softevo.core.ga.state import GAState
     from softevo.core.ga.steady_state import Birth, Nursery
-    from softevo.core.generation import Engine, Hooks, Step
+    from softevo.core.generation import Hooks, Step, Stepper
 
 #: What a batch thread hands back: the births it held, its result or what it raised.
 Landing = tuple[list["Birth"], BatchResult | None, BaseException | None]
@@ -83,7 +83,7 @@ class Flights:
 class _Row:
     """The step's bookkeeping: the births waiting to go out, the alarm that wakes it."""
 
-    engine: Engine
+    stepper: Stepper
     nursery: Nursery
     cache: dict[str, float]
     measures: dict[str, dict[str, float]]
@@ -95,8 +95,8 @@ class _Row:
     def keep(self, births: list[Birth]) -> None:
         """New births: kept by the hooks (which may know their fitness, after a takeover), and
         queued to go out unless an earlier birth has their genome."""
-        population = self.engine.algorithm.config.population
-        total = population * self.engine.algorithm.config.generations
+        population = self.stepper.algorithm.config.population
+        total = population * self.stepper.algorithm.config.generations
         births = [birth for birth in births if birth.number < total]  # past the end: never sent
         rows: dict[int, dict[int, Birth]] = {}
         for birth in births:
@@ -120,12 +120,12 @@ class _Row:
                 if genome_hash not in self.cache and genome_hash not in flights.out:
                     births.append(birth)
             if births:
-                files = [self.engine.robot_file(birth.individual) for birth in births]
+                files = [self.stepper.robot_file(birth.individual) for birth in births]
                 flights.send(births, files, self.key)
 
     def landed(self, births: list[Birth], result: BatchResult) -> None:
         """A batch's results: cached by genome, and handed to the hooks by row."""
-        population = self.engine.algorithm.config.population
+        population = self.stepper.algorithm.config.population
         records = result.records()
         for birth, value, record in zip(births, result.fitness.tolist(), records, strict=True):
             self.cache[birth.individual.genome.hash] = value
@@ -143,7 +143,7 @@ class _Row:
 
 
 def stream_step(
-    engine: Engine,
+    stepper: Stepper,
     state: GAState,
     cache: dict[str, float],
     evaluator: Evaluator,
@@ -155,9 +155,9 @@ def stream_step(
     from softevo.core.generation import Step
 
     started = time.perf_counter()
-    nursery = engine.algorithm.nursery(state, cache)  # type: ignore[attr-defined]
-    flights = engine.flights(evaluator, hooks.alarm)
-    row = _Row(engine, nursery, cache, measures, hooks, key)
+    nursery = stepper.algorithm.nursery(state, cache)  # type: ignore[attr-defined]
+    flights = stepper.flights(evaluator, hooks.alarm)
+    row = _Row(stepper, nursery, cache, measures, hooks, key)
     row.keep(list(nursery.window))
     try:
         while not nursery.row_done:
