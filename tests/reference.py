@@ -5,12 +5,16 @@ file compare their runs of the same request with it); callers only read it."""
 from __future__ import annotations
 
 import json
+from collections.abc import Iterable
 from functools import cache
 from typing import Any
+
+import numpy as np
 
 from softevo.core.config import resolve
 from softevo.core.evaluation import SerialEvaluator
 from softevo.core.evolution import Evolution
+from softevo.core.front import Row, front_rows, front_values
 
 
 @cache
@@ -23,3 +27,12 @@ def _undisturbed(request_text: str) -> Evolution:
 def undisturbed(request: dict[str, Any]) -> Evolution:
     """The finished in-process run of `request` (a run request, as `POST /runs` takes it)."""
     return _undisturbed(json.dumps(request, sort_keys=True))
+
+
+def front_points(request: dict[str, Any], rows: Iterable[Row]) -> list[list[float]]:
+    """The distinct maximised points of the front of `rows` (individuals as the store or the
+    API gives them) under the request's objectives, sorted as the state keeps its front so far
+    (`GAState.data["front"]`), so a served front compares with the undisturbed run's."""
+    specs = resolve(request).objectives
+    points = front_values(specs, front_rows(specs, rows))
+    return np.unique(points, axis=0).tolist()

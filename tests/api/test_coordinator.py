@@ -20,11 +20,12 @@ from softevo.api import store
 from softevo.api.coordinator import Coordinator
 from softevo.api.db import Database
 from softevo.api.models import Base, Individual
+from softevo.api.store import front as front_store
 from softevo.core import evaluator as batches
 from softevo.core.config import resolve
 from softevo.core.evaluation import SerialEvaluator
 from softevo.core.evaluator import BatchResult
-from tests.reference import undisturbed
+from tests.reference import front_points, undisturbed
 
 REQUEST = {"preset": "quick", "seed": 5, "population": 8, "generations": 4}
 
@@ -104,8 +105,24 @@ class FreezingEvaluator(SerialEvaluator):
             time.sleep(0.02)
 
 
-def test_takeover_after_a_coordinator_freezes_gives_the_undisturbed_curve(db: Database) -> None:
-    run = store.create_run(db, resolve(REQUEST))
+#: NSGA-II and AFPO with objectives: the taken-over run must also rebuild what they breed from
+#: (objective values, births, lineages) and the front so far from the database.
+PARETO = {"objectives": ["speed", "-cost_of_transport"]}
+
+
+@pytest.mark.parametrize(
+    "request_body",
+    [
+        REQUEST,
+        {**REQUEST, "algorithm": "nsga2", **PARETO},
+        {**REQUEST, "algorithm": "afpo", **PARETO},
+    ],
+    ids=["ga", "nsga2", "afpo"],
+)
+def test_takeover_after_a_coordinator_freezes_gives_the_undisturbed_curve(
+    db: Database, request_body: dict[str, Any]
+) -> None:
+    run = store.create_run(db, resolve(request_body))
     frozen = FreezingEvaluator(calls=5)
     first = Coordinator(db, frozen, batch_size=2, lease_seconds=1.0, poll_seconds=0.05)
     first.start()
@@ -128,7 +145,11 @@ def test_takeover_after_a_coordinator_freezes_gives_the_undisturbed_curve(db: Da
         ).all()  # fmt: skip
     assert "pending" not in dict(statuses)
     assert sum(count for _, count in statuses) == 8 * 4
-    assert store.curve(db, run.id) == undisturbed(REQUEST).curve()
+    reference = undisturbed(request_body)
+    assert store.curve(db, run.id) == reference.curve()
+    if "objectives" in request_body:  # and the front is the undisturbed run's
+        front = front_points(request_body, front_store.evaluated(db, run.id))
+        assert front == reference.state.data["front"] and front
 
 
 def test_a_failing_evaluator_fails_the_run_with_its_reason(db: Database) -> None:
