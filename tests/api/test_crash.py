@@ -21,7 +21,7 @@ from sqlalchemy import Engine, create_engine, text
 from softevo.api.db import Database, normalise_url
 from softevo.core.evolution import CURVE_COLUMNS
 from softevo.local_service import LocalService, ServiceError, start_service
-from tests.reference import undisturbed
+from tests.reference import front_points, undisturbed
 
 #: 3x3x3 robots simulated for 20 s: a batch of two takes ~0.2 s, so a generation (about eight new
 #: robots, four batches) lasts long enough to be caught between its first and last batch.
@@ -46,6 +46,9 @@ STEADY_REQUEST = {
     "options": {"window": 8},
     "sim": {"duration": 10.0},
 }
+#: The same run as AFPO on speed and cost of transport: the objective values, births and lineage
+#: starts it breeds from, and the front so far, ride in the state the generation commit writes.
+AFPO_REQUEST = {**REQUEST, "algorithm": "afpo", "objectives": ["speed", "-cost_of_transport"]}
 GENERATIONS = REQUEST["generations"]
 POPULATION = REQUEST["population"]
 #: The server is killed in the first generation from KILL_AT on caught half evaluated; the last
@@ -280,6 +283,23 @@ def test_sigkill_mid_generation_then_restart_resumes_with_the_same_curve(
             (list(e.cell), list(e.values), e.fitness, e.generation, e.index)
             for e in evolution.state.archive.ordered()
         ]
+    if "objectives" in request_body:  # and the front is the undisturbed run's
+        points = second.client.get(f"/runs/{run_id}/front").json()["points"]
+        assert front_points(request_body, points) == evolution.state.data["front"]
+
+
+@pytest.mark.slow
+@pytest.mark.fault
+@pytest.mark.parametrize("database_url", ["sqlite"], indirect=True)
+def test_an_afpo_run_with_objectives_sigkilled_resumes_with_the_same_curve_and_front(
+    start_server: Callable[[], Server], engine: Engine
+) -> None:
+    """The test above for AFPO on speed and cost of transport, on SQLite only (its run
+    measures energy, so it is the dearest; a takeover of NSGA-II and AFPO on both databases is
+    `test_coordinator.py`'s)."""
+    test_sigkill_mid_generation_then_restart_resumes_with_the_same_curve(
+        start_server, engine, AFPO_REQUEST
+    )
 
 
 @pytest.mark.slow
