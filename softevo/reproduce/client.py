@@ -17,10 +17,11 @@ from softevo.reproduce.plan import FINAL
 
 @contextlib.contextmanager
 def service(
-    url: str | None, out: Path, workers: int | None, resume: bool = False
+    url: str | None, out: Path, workers: int | None, resume: bool = False, running: int = 2
 ) -> Iterator[Client]:
     """A client of `url` (token from SOFTEVO_API_TOKEN), or of a private `softevo serve` on a
-    SQLite file in `out` (kept with `resume`, else started afresh)."""
+    SQLite file in `out` (kept with `resume`, else started afresh) that drives `running` runs
+    at a time (1: each run's wall time is its own, with every core to itself)."""
     if url:
         with Client(url, token=os.environ.get("SOFTEVO_API_TOKEN")) as client:
             yield client
@@ -31,7 +32,7 @@ def service(
     env = {
         **os.environ,
         "SOFTEVO_DATABASE_URL": f"sqlite:///{out / 'softevo.db'}",
-        "SOFTEVO_MAX_RUNNING": "2",
+        "SOFTEVO_MAX_RUNNING": str(running),
         "SOFTEVO_MAX_QUEUED": "10000",
     }
     env.pop("SOFTEVO_REDIS_URL", None)
