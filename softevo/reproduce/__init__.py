@@ -33,6 +33,8 @@ from softevo.reproduce.objectives import run_objectives
 from softevo.reproduce.objectives_report import write_objectives
 from softevo.reproduce.plan import FULL, QUICK
 from softevo.reproduce.qd import run_qd, write_qd
+from softevo.reproduce.steady import RUNNING, run_steady
+from softevo.reproduce.steady_report import write_steady
 from softevo.reproduce.tables import fmt, write_tables
 from softevo.reproduce.tasks import run_suite, write_suite
 
@@ -69,11 +71,18 @@ def add_parser(commands: Any) -> None:
         "afpo.png",
     )  # fmt: skip
     parser.add_argument(
+        "--steady", action="store_true",
+        help="run asynchronous steady-state evolution against the paper's GA instead (4x4x3, "
+        "4x4x4, 3x3x6 x seeds 1-3, on the GA's simulations, each run alone for its wall time; "
+        "and one run again with robots that take time in proportion to their size, compared "
+        "with the instant one): steady.csv, timing.csv, steady.md, steady.png",
+    )  # fmt: skip
+    parser.add_argument(
         "--out",
         help="output folder, relative to the current folder (default docs/experiments; with "
         "--tasks docs/experiments/tasks, with --qd docs/experiments/qd, with --objectives "
-        "docs/experiments/objectives: the repository's own when run from its root); the full "
-        "path is printed first",
+        "docs/experiments/objectives, with --steady docs/experiments/steady: the repository's "
+        "own when run from its root); the full path is printed first",
     )
     parser.add_argument(
         "--url", help="a running service (token from SOFTEVO_API_TOKEN); default: start one"
@@ -92,7 +101,7 @@ def add_parser(commands: Any) -> None:
 
 def reproduce_command(args: argparse.Namespace) -> int:
     plan = QUICK if args.quick else FULL
-    chosen = [name for name in ("tasks", "qd", "objectives") if getattr(args, name)]
+    chosen = [name for name in ("tasks", "qd", "objectives", "steady") if getattr(args, name)]
     if len(chosen) > 1:
         args.parser.error(f"--{' and --'.join(chosen)} are {len(chosen)} suites: run one at a time")
     suite = chosen[0] if chosen else None
@@ -131,19 +140,22 @@ def reproduce_command(args: argparse.Namespace) -> int:
 
 
 def _suite(args: argparse.Namespace, out: Path, started: float, suite: str) -> int:
-    """`--tasks`, `--qd` or `--objectives`: one suite through the service, its tables and
-    figures."""
+    """`--tasks`, `--qd`, `--objectives` or `--steady`: one suite through the service, its
+    tables and figures."""
     flags = " --quick" if args.quick else ""
     command = f"softevo reproduce --{suite}{flags} --out {out}" + (
         f" --url {args.url}" if args.url else ""
     )
     print(f"{command}: results in {out.absolute()}/", flush=True)
     try:
-        with service(args.url, out, args.workers, args.resume) as client:
+        running = RUNNING if suite == "steady" else 2
+        with service(args.url, out, args.workers, args.resume, running) as client:
             if suite == "qd":
                 rows, archives = run_qd(client, args.quick)
             elif suite == "objectives":
                 results = run_objectives(client, args.quick)
+            elif suite == "steady":
+                steady = run_steady(client, args.quick, args.workers)
             else:
                 rows = run_suite(client, args.quick)
     except APIError as error:
@@ -156,6 +168,8 @@ def _suite(args: argparse.Namespace, out: Path, started: float, suite: str) -> i
         write_qd(rows, archives, out, command, wall)
     elif suite == "objectives":
         write_objectives(results, out, command, wall)
+    elif suite == "steady":
+        write_steady(steady, out, command, wall)
     else:
         write_suite(rows, out, command, wall)
     print(f"done in {wall:.0f} s: {out / f'{suite}.md'}")
