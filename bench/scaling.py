@@ -1,0 +1,392 @@
+"""Past one machine, by simulation (issue 37): `nice -n 5 python bench/scaling.py [--workers 32]
+[--population 200] [--generations 30] [--windows 128,200] [--algorithms steady-state,ga]
+[--database sqlite|postgres] [--robot-ms MS1,MS2,MS3,MS4] [--profile]`.
+
+One API process (this one: the service's `Coordinator` on a fresh SQLite database, or a scratch
+PostgreSQL one, its evaluator the service's `RQEvaluator`) drives a `paper-voxel` run (4x4x4,
+seed 1) of `population` x `generations` at a time, on `workers` RQ `SimpleWorker` processes and
+a private redis-server on this machine. The workers are built as `softevo worker --worker-class
+simple` builds them (softevo's job class, queue and JSON serializer; no kernels loaded) and run
+the stand-in job `bench/scaling_job.py`: it sleeps each batch's simulation time by a time model
+measured here first (each robot's seconds per occupied voxel in a kernel call of 1, 2, 3 and 4
+robots, `evaluate_robot_files`, best of 3; `--robot-ms` gives the ms of the sample's mean robot
+instead) and returns a deterministic fitness with a record of measures, so the run is the real
+RQ path (enqueue, Redis round trips, results, the store's writes) with only the simulation
+replaced, and the workers cost no CPU but RQ's own.
+
+Each steady-state window in `--windows` and the generational GA at the same population are run
+once, after an untimed warm-up run. For each it prints: the fraction of worker-time spent busy
+(the stand-in's simulation seconds / (workers x wall), the wall from the coordinator's start to
+the run's last commit); the coordinator's CPU per birth (this process's CPU over the run: its
+step, store and RQ client; the stand-in's arithmetic runs on the workers, so nothing is taken
+out), split into the run's driver thread, the batch threads (enqueue, BLPOP, decode, checks) and
+the rest; Redis commands (INFO commandstats) and read events (INFO stats `total_reads_processed`,
+about one per round trip, a pipeline counting once) per simulated robot; redis-server's and the
+workers' CPU per job; and the load of other processes meanwhile (`OtherLoad`). `--profile` runs
+each once more under yappi (CPU clock, every thread) and prints where this process's time goes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import gc
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import rq
+import scaling_job
+from benchlib import OtherLoad, cpu_model, redis_version
+from redis import Redis
+from rq import Worker
+from rq_workers import redis_server, stop
+
+from softevo.api import store
+from softevo.api.coordinator import Coordinator
+from softevo.api.db import Database, scratch_postgres
+from softevo.core.config import resolve
+from softevo.worker.evaluator import RQEvaluator
+from softevo.worker.queue import connect
+
+POSTGRES = os.environ.get("SOFTEVO_TEST_POSTGRES", "postgresql://postgres@127.0.0.1:5432/test")
+BENCH = Path(__file__).resolve().parent
+#: One worker: `softevo worker --worker-class simple`'s worker without the kernels' warm-up.
+WORKER = """
+import sys
+from rq import Queue, SimpleWorker
+from softevo.worker.job import job_class
+from softevo.worker.queue import QUEUE, SERIALIZER, connect
+url, name, function = sys.argv[1:4]
+connection = connect(url)
+jobs = job_class((function,))
+queues = [Queue(QUEUE, connection=connection, serializer=SERIALIZER, job_class=jobs)]
+worker = SimpleWorker(queues, connection=connection, serializer=SERIALIZER, job_class=jobs,
+                      name=name)
+worker.work(logging_level="WARNING", with_scheduler=False)
+"""
+WIDTHS = (1, 2, 3, 4)
+
+
+def measure_model(repeats: int = 3, robots: int = 8) -> tuple[dict[int, float], float]:
+    """Seconds per occupied voxel in a kernel call of n robots (first-generation paper-voxel
+    robots of seed 1, the best of `repeats`), and the sample's mean occupied voxels."""
+    from softevo.core.evaluation import evaluate_robot_files, warm_up
+    from softevo.core.evolution import Evolution
+    from softevo.core.robot_file import robot_to_json
+
+    warm_up()
+    run = Evolution.start(resolve({"preset": "paper-voxel", "seed": 1}))
+    files = [robot_to_json(run.robot(item)) for item in run.individuals()][:robots]
+    voxels = [scaling_job.occupied(f) for f in files]
+    per_voxel = {}
+    for width in WIDTHS:
+        best = float("inf")
+        for _ in range(repeats):
+            started = time.perf_counter()
+            for start in range(0, robots, width):
+                evaluate_robot_files(files[start : start + width])
+            best = min(best, time.perf_counter() - started)
+        per_voxel[width] = best / sum(voxels)
+    return per_voxel, sum(voxels) / len(voxels)
+
+
+class CountedRQ(RQEvaluator):
+    """The service's RQ evaluator, adding up what its jobs report: simulation seconds, jobs,
+    robots (a few additions per job: no measurable CPU)."""
+
+    def __init__(self, url: str) -> None:
+        super().__init__(url, job_function=scaling_job.FUNCTION)
+        self.busy, self.jobs, self.robots = 0.0, 0, 0
+        self.spans: list[tuple[float, float]] = []  # each job's (started, simulation seconds)
+        self._counted = threading.Lock()
+
+    def collect(self, files: list[dict[str, Any]], key: str, *args: Any) -> dict[str, Any]:
+        payload = super().collect(files, key, *args)
+        if "fitness" in payload:
+            with self._counted:
+                self.busy += float(payload["seconds"])
+                self.jobs += 1
+                self.robots += len(files)
+                self.spans.append((float(payload["started"]), float(payload["seconds"])))
+        return payload
+
+
+@contextlib.contextmanager
+def workers(url: str, count: int, workdir: Path, per_voxel: dict[int, float]) -> Iterator[list]:
+    """`count` SimpleWorkers running the stand-in job, registered before this yields."""
+    env = {k: v for k, v in os.environ.items() if not k.startswith("SOFTEVO_")}
+    env[scaling_job.MODEL_ENV] = scaling_job.model_json(per_voxel)
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(BENCH), env.get("PYTHONPATH")]))
+    processes = []
+    try:
+        with (workdir / "workers.log").open("w") as log:
+            for i in range(count):
+                command = [sys.executable, "-c", WORKER, url, f"stand-in-{i + 1}"]
+                processes.append(subprocess.Popen(
+                    [*command, scaling_job.FUNCTION], stdout=log, stderr=subprocess.STDOUT,
+                    env=env, start_new_session=True,
+                ))  # fmt: skip
+        connection, deadline = connect(url), time.monotonic() + 180
+        while Worker.count(connection=connection) < count:
+            if any(p.poll() is not None for p in processes) or time.monotonic() > deadline:
+                logs = (workdir / "workers.log").read_text()
+                raise RuntimeError(f"workers did not start:\n{logs}")
+            time.sleep(0.2)
+        connection.close()
+        yield processes
+    finally:
+        for process in processes:
+            process.terminate()
+        for process in processes:
+            stop(process, grace=5)
+
+
+def mid_busy(spans: list[tuple[float, float]], start: float, end: float, workers: int) -> float:
+    """The busy fraction in the run's middle 80 % (no start, no tail): simulation seconds
+    within it / (workers x its length)."""
+    low, high = start + 0.1 * (end - start), end - 0.1 * (end - start)
+    inside = sum(max(0.0, min(high, s + d) - max(low, s)) for s, d in spans)
+    return inside / (workers * (high - low))
+
+
+def process_cpu(pids: list[int]) -> float:
+    """CPU seconds (user + system) the processes have used so far."""
+    ticks = 0
+    for pid in pids:
+        with contextlib.suppress(OSError):
+            fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+            ticks += int(fields[11]) + int(fields[12])
+    return ticks / os.sysconf("SC_CLK_TCK")
+
+
+def thread_cpu() -> dict[int, tuple[str, float]]:
+    """Each live thread of this process: its name and CPU seconds so far."""
+    found = {}
+    for thread in threading.enumerate():
+        with contextlib.suppress(OSError, OverflowError, TypeError):
+            clock = time.pthread_getcpuclockid(thread.ident)  # type: ignore[arg-type]
+            found[thread.ident or 0] = (thread.name, time.clock_gettime(clock))
+    return found
+
+
+def redis_counters(connection: Redis) -> tuple[int, int, float]:
+    """Commands run (less INFO), read events, CPU seconds of redis-server so far. Between two
+    calls on one connection, 3 of the read events are theirs (`drive` takes them out)."""
+    stats = connection.info("commandstats")
+    commands = sum(int(v["calls"]) for k, v in stats.items() if k != "cmdstat_info")
+    reads = int(connection.info("stats")["total_reads_processed"])
+    cpu = connection.info("cpu")
+    return commands, reads, float(cpu["used_cpu_user"]) + float(cpu["used_cpu_sys"])
+
+
+@dataclass
+class Figures:
+    label: str
+    births: int
+    robots: int
+    jobs: int
+    wall: float
+    busy: float  # the stand-in's simulation seconds
+    mid: float  # the busy fraction in the middle 80 % of the wall
+    cpu: float  # this process
+    cpu_driver: float
+    cpu_batches: float
+    commands: int
+    reads: int
+    redis_cpu: float
+    workers_cpu: float
+    other: float  # cores used by processes outside this bench
+    best: float | None
+
+    def line(self, workers: int) -> str:
+        per_birth = 1e3 / self.births
+        return (
+            f"{self.label:<22}{self.births:>7}{self.robots:>7}{self.robots / self.jobs:>7.2f}"
+            f"{self.wall:>8.1f}{self.busy / (workers * self.wall):>7.3f}{self.mid:>6.3f}"
+            f"{self.cpu * per_birth:>9.3f}{self.cpu_driver * per_birth:>8.3f}"
+            f"{self.cpu_batches * per_birth:>8.3f}{self.commands / self.robots:>8.1f}"
+            f"{self.reads / self.robots:>7.1f}{1e3 * self.redis_cpu / self.jobs:>7.2f}"
+            f"{1e3 * self.workers_cpu / self.jobs:>8.2f}{self.other:>6.2f}"
+            f"{'' if self.best is None else f'{self.best:>6.3f}'}"
+        )
+
+
+HEADER = (
+    f"{'run':<22}{'births':>7}{'robots':>7}{'r/job':>7}{'wall s':>8}{'busy':>7}{'mid':>6}"
+    f"{'CPU/b ms':>9}{'driver':>8}{'batches':>8}{'cmd/r':>8}{'rd/r':>7}{'redis':>7}"
+    f"{'workers':>8}{'other':>6}{'best':>6}"
+)
+
+
+def request(args: argparse.Namespace, algorithm: str, window: int | None) -> dict[str, Any]:
+    extra = {} if window is None else {"options": {"window": window}}
+    return {"preset": "paper-voxel", "seed": 1, "population": args.population,
+            "generations": args.generations, "algorithm": algorithm, **extra}  # fmt: skip
+
+
+@contextlib.contextmanager
+def database(kind: str, folder: Path, name: str) -> Iterator[Database]:
+    """A fresh database of `kind` (a file in `folder`, or a scratch PostgreSQL database)."""
+    with contextlib.ExitStack() as stack:
+        if kind == "sqlite":
+            url = f"sqlite:///{folder / f'{name}.db'}"
+        else:
+            url = stack.enter_context(scratch_postgres(POSTGRES, f"softevo_scaling_{name}"))
+        db = Database(url)
+        db.upgrade()
+        try:
+            yield db
+        finally:
+            db.dispose()
+
+
+def drive(db: Database, url: str, run_request: dict[str, Any], batch_size: int,
+          pids: list[int], label: str) -> Figures:  # fmt: skip
+    """One run to completion through a fresh coordinator, measured (see the module)."""
+    config = resolve(run_request)
+    run = store.create_run(db, config)
+    evaluator, counters = CountedRQ(url), connect(url)
+    coordinator = Coordinator(db, evaluator, max_running=1, batch_size=batch_size)
+    threads, redis, workers_cpu = thread_cpu(), redis_counters(counters), process_cpu(pids)
+    other = OtherLoad().start()
+    cpu, wall, start = time.process_time(), time.perf_counter(), time.time()
+    coordinator.start()
+    gc.freeze()  # as the service does once its coordinator has started (`api.app`)
+    while run.id not in coordinator.active and store.get_run(db, run.id).status == "queued":
+        coordinator.wait_ticks(1, timeout=60)
+    coordinator.join(run.id, timeout=3600)
+    cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
+    after, redis_after = thread_cpu(), redis_counters(counters)
+    workers_cpu, other_load = process_cpu(pids) - workers_cpu, other.stop()
+    coordinator.stop()
+    evaluator.close()
+    counters.close()
+    record = store.get_run(db, run.id)
+    if record.status != "completed":
+        raise SystemExit(f"{label}: the run ended {record.status}: {record.error}")
+    spent = {  # CPU of each thread alive at the end, since the start (or its birth)
+        ident: (name, seconds - (threads[ident][1] if threads.get(ident, ("",))[0] == name else 0))
+        for ident, (name, seconds) in after.items()
+    }
+    batches = sum(s for name, s in spent.values() if name.startswith("batch"))
+    mid = mid_busy(evaluator.spans, start, start + wall, len(pids))
+    return Figures(
+        label, config.population * config.generations, evaluator.robots, evaluator.jobs, wall,
+        evaluator.busy, mid, cpu, cpu - sum(s for _, s in spent.values()), batches,
+        redis_after[0] - redis[0], redis_after[1] - redis[1] - 3, redis_after[2] - redis[2],
+        workers_cpu, other_load, record.best_fitness,
+    )  # fmt: skip
+
+
+def profile(drive_once: Any, label: str, top: int = 25) -> None:
+    """`drive_once()` under yappi (CPU clock, every thread); prints where the time went."""
+    import yappi
+
+    yappi.clear_stats()
+    yappi.set_clock_type("cpu")
+    yappi.start(builtins=True, profile_threads=True)
+    figures = drive_once()
+    yappi.stop()
+    stats = yappi.get_func_stats()
+    total = sum(stat.tsub for stat in stats)
+    per_birth = 1e3 * total / figures.births
+    print(f"\n{label}: yappi, CPU clock, every thread: {total:.2f} s of own time "
+          f"({per_birth:.3f} ms per birth; unprofiled figures above)")  # fmt: skip
+    places: dict[str, float] = {}
+    for stat in stats:
+        places[place(stat.module)] = places.get(place(stat.module), 0.0) + stat.tsub
+    for name, seconds in sorted(places.items(), key=lambda item: -item[1]):
+        if seconds >= 0.01 * total:
+            print(f"  {seconds / total:6.1%}  {name}")
+    print(f"  own time, the top {top} functions:")
+    for stat in sorted(stats, key=lambda s: -s.tsub)[:top]:
+        print(f"  {stat.tsub / total:6.1%} {stat.ncall:>8} calls  {place(stat.module)}:"
+              f"{stat.name}")  # fmt: skip
+    print("  inclusive time of softevo's functions, the top 15:")
+    mine = [stat for stat in stats if "softevo" in place(stat.module)]
+    for stat in sorted(mine, key=lambda s: -s.ttot)[:15]:
+        print(f"  {stat.ttot / total:6.1%} {stat.ncall:>8} calls  {place(stat.module)}:"
+              f"{stat.name}")  # fmt: skip
+    yappi.clear_stats()
+
+
+def place(module: str) -> str:
+    """A module's file as a short name: softevo/..., the package of a library, or the file."""
+    path = Path(module)
+    parts = path.parts
+    for anchor in ("site-packages", "dist-packages"):
+        if anchor in parts:
+            return "/".join(parts[parts.index(anchor) + 1 :][:2])
+    if path.is_relative_to(BENCH.parent):  # this checkout (installed editable)
+        return "softevo/" + str(path.relative_to(BENCH.parent))
+    return path.name if path.suffix else module
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--workers", type=int, default=32, help="RQ SimpleWorkers (32)")
+    parser.add_argument("--population", type=int, default=200, help="population (200)")
+    parser.add_argument("--generations", type=int, default=30, help="rows of births (30)")
+    parser.add_argument("--windows", default="128,200", help="steady-state windows (128,200)")
+    parser.add_argument("--algorithms", default="steady-state,ga", help="steady-state,ga")
+    parser.add_argument("--batch-size", type=int, default=4, help="robots per job (4)")
+    parser.add_argument("--database", choices=["sqlite", "postgres"], default="sqlite")
+    parser.add_argument("--robot-ms", help="ms of the sample's mean robot in a call of 1,2,3,4")
+    parser.add_argument("--profile", action="store_true", help="each run again under yappi")
+    args = parser.parse_args()
+    if shutil.which("redis-server") is None:
+        sys.exit("bench/scaling.py needs the redis-server binary")
+    if args.robot_ms:
+        per_voxel, mean = measure_model(repeats=1, robots=1)  # only the sample's mean voxels
+        ms = [float(v) for v in args.robot_ms.split(",")]
+        per_voxel = {width: ms[i] / 1e3 / mean for i, width in enumerate(WIDTHS)}
+    else:
+        per_voxel, mean = measure_model()
+    runs = [
+        (f"steady-state W={w}", request(args, "steady-state", int(w)))
+        for w in args.windows.split(",") if "steady-state" in args.algorithms.split(",")
+    ] + [("ga", request(args, "ga", None))] * ("ga" in args.algorithms.split(","))  # fmt: skip
+    load = os.getloadavg()
+    print(f"# {cpu_model()}, {os.cpu_count()} cores, load {load[0]:.2f} {load[1]:.2f} "
+          f"{load[2]:.2f}, Python {platform.python_version()}, rq {rq.__version__}, "
+          f"redis-server {redis_version()}, {args.database}")  # fmt: skip
+    print(f"# paper-voxel 4x4x4 seed 1, population {args.population} x {args.generations}, "
+          f"{args.workers} SimpleWorkers, batches of {args.batch_size}; the stand-in sleeps "
+          + ", ".join(f"{1e3 * per_voxel[w] * mean:.1f}" for w in WIDTHS)
+          + f" ms per robot of {mean:.1f} voxels in a call of 1, 2, 3, 4 robots")  # fmt: skip
+    print("# busy: simulation / (workers x wall), mid: the same in the wall's middle 80 %;")
+    print("# CPU/b: this process's CPU per birth (ms), driver and batches: its threads'; cmd/r,")
+    print("# rd/r: Redis commands and read events per robot; redis, workers: their CPU per job")
+    print("# (ms); other: cores used meanwhile by processes outside this bench")
+    print(HEADER, flush=True)
+    with tempfile.TemporaryDirectory(prefix="softevo-scaling-") as tmp:
+        folder = Path(tmp)
+        with redis_server(folder) as url, workers(url, args.workers, folder, per_voxel) as procs:
+            pids = [process.pid for process in procs]
+
+            def once(label: str, run_request: dict[str, Any], name: str) -> Figures:
+                with database(args.database, folder, name) as db:
+                    return drive(db, url, run_request, args.batch_size, pids, label)
+
+            for label, run_request in runs:  # untimed: imports, first calls, every worker
+                once(label, {**run_request, "generations": 2}, f"warm{len(label)}")
+            for number, (label, run_request) in enumerate(runs):
+                print(once(label, run_request, f"run{number}").line(args.workers), flush=True)
+            for number, (label, run_request) in enumerate(runs * args.profile):
+                profile(lambda: once(label, run_request, f"profile{number}"), label)  # noqa: B023
+    load = os.getloadavg()
+    print(f"# load after: {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
+
+
+if __name__ == "__main__":
+    main()
