@@ -17,7 +17,9 @@ replaced, and the workers cost no CPU but RQ's own.
 Each steady-state window in `--windows` and the generational GA at the same population are run
 once, after an untimed warm-up run. For each it prints: the fraction of worker-time spent busy
 (the stand-in's simulation seconds / (workers x wall), the wall from the coordinator's start to
-the run's last commit); the coordinator's CPU per birth (this process's CPU over the run: its
+the run's last commit), the same in the middle 80 % of the wall, the share of that middle in
+which no job waited on the queue (sampled every 50 ms: the coordinator starved the workers) and
+the median gap between a worker's jobs (RQ's work on both sides of a job); the coordinator's CPU per birth (this process's CPU over the run: its
 step, store and RQ client; the stand-in's arithmetic runs on the workers, so nothing is taken
 out), split into the run's driver thread, the batch threads (enqueue, BLPOP, decode, checks) and
 the rest; Redis commands (INFO commandstats) and read events (INFO stats `total_reads_processed`,
@@ -46,10 +48,10 @@ from typing import Any
 
 import rq
 import scaling_job
-from benchlib import OtherLoad, cpu_model, redis_version
-from redis import Redis
+from benchlib import cpu_model, redis_version
 from rq import Worker
 from rq_workers import redis_server, stop
+from scaling_meter import Meter, median_gap, mid_busy, profile
 
 from softevo.api import store
 from softevo.api.coordinator import Coordinator
@@ -107,7 +109,7 @@ class CountedRQ(RQEvaluator):
     def __init__(self, url: str) -> None:
         super().__init__(url, job_function=scaling_job.FUNCTION)
         self.busy, self.jobs, self.robots = 0.0, 0, 0
-        self.spans: list[tuple[float, float]] = []  # each job's (started, simulation seconds)
+        self.spans: list[tuple[str, float, float]] = []  # each job's worker, start, seconds
         self._counted = threading.Lock()
 
     def collect(self, files: list[dict[str, Any]], key: str, *args: Any) -> dict[str, Any]:
@@ -117,7 +119,8 @@ class CountedRQ(RQEvaluator):
                 self.busy += float(payload["seconds"])
                 self.jobs += 1
                 self.robots += len(files)
-                self.spans.append((float(payload["started"]), float(payload["seconds"])))
+                started, seconds = float(payload["started"]), float(payload["seconds"])
+                self.spans.append((str(payload["worker"]), started, seconds))
         return payload
 
 
@@ -151,44 +154,6 @@ def workers(url: str, count: int, workdir: Path, per_voxel: dict[int, float]) ->
             stop(process, grace=5)
 
 
-def mid_busy(spans: list[tuple[float, float]], start: float, end: float, workers: int) -> float:
-    """The busy fraction in the run's middle 80 % (no start, no tail): simulation seconds
-    within it / (workers x its length)."""
-    low, high = start + 0.1 * (end - start), end - 0.1 * (end - start)
-    inside = sum(max(0.0, min(high, s + d) - max(low, s)) for s, d in spans)
-    return inside / (workers * (high - low))
-
-
-def process_cpu(pids: list[int]) -> float:
-    """CPU seconds (user + system) the processes have used so far."""
-    ticks = 0
-    for pid in pids:
-        with contextlib.suppress(OSError):
-            fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-            ticks += int(fields[11]) + int(fields[12])
-    return ticks / os.sysconf("SC_CLK_TCK")
-
-
-def thread_cpu() -> dict[int, tuple[str, float]]:
-    """Each live thread of this process: its name and CPU seconds so far."""
-    found = {}
-    for thread in threading.enumerate():
-        with contextlib.suppress(OSError, OverflowError, TypeError):
-            clock = time.pthread_getcpuclockid(thread.ident)  # type: ignore[arg-type]
-            found[thread.ident or 0] = (thread.name, time.clock_gettime(clock))
-    return found
-
-
-def redis_counters(connection: Redis) -> tuple[int, int, float]:
-    """Commands run (less INFO), read events, CPU seconds of redis-server so far. Between two
-    calls on one connection, 3 of the read events are theirs (`drive` takes them out)."""
-    stats = connection.info("commandstats")
-    commands = sum(int(v["calls"]) for k, v in stats.items() if k != "cmdstat_info")
-    reads = int(connection.info("stats")["total_reads_processed"])
-    cpu = connection.info("cpu")
-    return commands, reads, float(cpu["used_cpu_user"]) + float(cpu["used_cpu_sys"])
-
-
 @dataclass
 class Figures:
     label: str
@@ -198,6 +163,8 @@ class Figures:
     wall: float
     busy: float  # the stand-in's simulation seconds
     mid: float  # the busy fraction in the middle 80 % of the wall
+    empty: float  # the share of the middle 80 % with no job waiting on the queue
+    gap: float  # the median time (s) between a worker's jobs
     cpu: float  # this process
     cpu_driver: float
     cpu_batches: float
@@ -213,6 +180,7 @@ class Figures:
         return (
             f"{self.label:<22}{self.births:>7}{self.robots:>7}{self.robots / self.jobs:>7.2f}"
             f"{self.wall:>8.1f}{self.busy / (workers * self.wall):>7.3f}{self.mid:>6.3f}"
+            f"{self.empty:>6.2f}{1e3 * self.gap:>6.0f}"
             f"{self.cpu * per_birth:>9.3f}{self.cpu_driver * per_birth:>8.3f}"
             f"{self.cpu_batches * per_birth:>8.3f}{self.commands / self.robots:>8.1f}"
             f"{self.reads / self.robots:>7.1f}{1e3 * self.redis_cpu / self.jobs:>7.2f}"
@@ -223,6 +191,7 @@ class Figures:
 
 HEADER = (
     f"{'run':<22}{'births':>7}{'robots':>7}{'r/job':>7}{'wall s':>8}{'busy':>7}{'mid':>6}"
+    f"{'q=0':>6}{'gap':>6}"
     f"{'CPU/b ms':>9}{'driver':>8}{'batches':>8}{'cmd/r':>8}{'rd/r':>7}{'redis':>7}"
     f"{'workers':>8}{'other':>6}{'best':>6}"
 )
@@ -255,81 +224,28 @@ def drive(db: Database, url: str, run_request: dict[str, Any], batch_size: int,
     """One run to completion through a fresh coordinator, measured (see the module)."""
     config = resolve(run_request)
     run = store.create_run(db, config)
-    evaluator, counters = CountedRQ(url), connect(url)
+    evaluator = CountedRQ(url)
     coordinator = Coordinator(db, evaluator, max_running=1, batch_size=batch_size)
-    threads, redis, workers_cpu = thread_cpu(), redis_counters(counters), process_cpu(pids)
-    other = OtherLoad().start()
-    cpu, wall, start = time.process_time(), time.perf_counter(), time.time()
+    meter = Meter(url, pids)
     coordinator.start()
     gc.freeze()  # as the service does once its coordinator has started (`api.app`)
     while run.id not in coordinator.active and store.get_run(db, run.id).status == "queued":
         coordinator.wait_ticks(1, timeout=60)
     coordinator.join(run.id, timeout=3600)
-    cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
-    after, redis_after = thread_cpu(), redis_counters(counters)
-    workers_cpu, other_load = process_cpu(pids) - workers_cpu, other.stop()
+    got = meter.stop()
     coordinator.stop()
     evaluator.close()
-    counters.close()
     record = store.get_run(db, run.id)
     if record.status != "completed":
         raise SystemExit(f"{label}: the run ended {record.status}: {record.error}")
-    spent = {  # CPU of each thread alive at the end, since the start (or its birth)
-        ident: (name, seconds - (threads[ident][1] if threads.get(ident, ("",))[0] == name else 0))
-        for ident, (name, seconds) in after.items()
-    }
-    batches = sum(s for name, s in spent.values() if name.startswith("batch"))
-    mid = mid_busy(evaluator.spans, start, start + wall, len(pids))
+    spans = evaluator.spans
     return Figures(
-        label, config.population * config.generations, evaluator.robots, evaluator.jobs, wall,
-        evaluator.busy, mid, cpu, cpu - sum(s for _, s in spent.values()), batches,
-        redis_after[0] - redis[0], redis_after[1] - redis[1] - 3, redis_after[2] - redis[2],
-        workers_cpu, other_load, record.best_fitness,
+        label, config.population * config.generations, evaluator.robots, evaluator.jobs,
+        got["wall"], evaluator.busy, mid_busy(spans, got["low"], got["high"], len(pids)),
+        got["empty"], median_gap(spans), got["cpu"], got["driver"], got["batches"],
+        int(got["commands"]), int(got["reads"]), got["redis"], got["workers"], got["other"],
+        record.best_fitness,
     )  # fmt: skip
-
-
-def profile(drive_once: Any, label: str, top: int = 25) -> None:
-    """`drive_once()` under yappi (CPU clock, every thread); prints where the time went."""
-    import yappi
-
-    yappi.clear_stats()
-    yappi.set_clock_type("cpu")
-    yappi.start(builtins=True, profile_threads=True)
-    figures = drive_once()
-    yappi.stop()
-    stats = yappi.get_func_stats()
-    total = sum(stat.tsub for stat in stats)
-    per_birth = 1e3 * total / figures.births
-    print(f"\n{label}: yappi, CPU clock, every thread: {total:.2f} s of own time "
-          f"({per_birth:.3f} ms per birth; unprofiled figures above)")  # fmt: skip
-    places: dict[str, float] = {}
-    for stat in stats:
-        places[place(stat.module)] = places.get(place(stat.module), 0.0) + stat.tsub
-    for name, seconds in sorted(places.items(), key=lambda item: -item[1]):
-        if seconds >= 0.01 * total:
-            print(f"  {seconds / total:6.1%}  {name}")
-    print(f"  own time, the top {top} functions:")
-    for stat in sorted(stats, key=lambda s: -s.tsub)[:top]:
-        print(f"  {stat.tsub / total:6.1%} {stat.ncall:>8} calls  {place(stat.module)}:"
-              f"{stat.name}")  # fmt: skip
-    print("  inclusive time of softevo's functions, the top 15:")
-    mine = [stat for stat in stats if "softevo" in place(stat.module)]
-    for stat in sorted(mine, key=lambda s: -s.ttot)[:15]:
-        print(f"  {stat.ttot / total:6.1%} {stat.ncall:>8} calls  {place(stat.module)}:"
-              f"{stat.name}")  # fmt: skip
-    yappi.clear_stats()
-
-
-def place(module: str) -> str:
-    """A module's file as a short name: softevo/..., the package of a library, or the file."""
-    path = Path(module)
-    parts = path.parts
-    for anchor in ("site-packages", "dist-packages"):
-        if anchor in parts:
-            return "/".join(parts[parts.index(anchor) + 1 :][:2])
-    if path.is_relative_to(BENCH.parent):  # this checkout (installed editable)
-        return "softevo/" + str(path.relative_to(BENCH.parent))
-    return path.name if path.suffix else module
 
 
 def main() -> None:
@@ -365,6 +281,8 @@ def main() -> None:
           + ", ".join(f"{1e3 * per_voxel[w] * mean:.1f}" for w in WIDTHS)
           + f" ms per robot of {mean:.1f} voxels in a call of 1, 2, 3, 4 robots")  # fmt: skip
     print("# busy: simulation / (workers x wall), mid: the same in the wall's middle 80 %;")
+    print("# q=0: the share of the middle with no job queued; gap: median ms between a worker's")
+    print("# jobs (RQ's work on both sides, the result's push, any wait for a job);")
     print("# CPU/b: this process's CPU per birth (ms), driver and batches: its threads'; cmd/r,")
     print("# rd/r: Redis commands and read events per robot; redis, workers: their CPU per job")
     print("# (ms); other: cores used meanwhile by processes outside this bench")
