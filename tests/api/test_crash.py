@@ -176,9 +176,7 @@ def _saved_fitness(engine: Engine, run_id: int, generation: int) -> list[tuple[A
 
 @pytest.mark.slow
 @pytest.mark.fault
-@pytest.mark.parametrize(
-    "request_body", [REQUEST, QD_REQUEST, STEADY_REQUEST], ids=["ga", "map-elites", "steady-state"]
-)
+@pytest.mark.parametrize("request_body", [REQUEST, QD_REQUEST], ids=["ga", "map-elites"])
 def test_sigkill_mid_generation_then_restart_resumes_with_the_same_curve(
     start_server: Callable[[], Server], engine: Engine, request_body: dict[str, Any]
 ) -> None:
@@ -299,6 +297,19 @@ def test_an_afpo_run_with_objectives_sigkilled_resumes_with_the_same_curve_and_f
     `test_coordinator.py`'s)."""
     test_sigkill_mid_generation_then_restart_resumes_with_the_same_curve(
         start_server, engine, AFPO_REQUEST
+    )
+
+
+@pytest.mark.slow
+@pytest.mark.fault
+@pytest.mark.parametrize("database_url", ["sqlite"], indirect=True)
+def test_a_steady_state_run_sigkilled_mid_row_resumes_with_the_same_curve(
+    start_server: Callable[[], Server], engine: Engine
+) -> None:
+    """The test above for steady-state, on SQLite only (a takeover on both databases is
+    `test_steady_state.py`'s)."""
+    test_sigkill_mid_generation_then_restart_resumes_with_the_same_curve(
+        start_server, engine, STEADY_REQUEST
     )
 
 
