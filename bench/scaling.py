@@ -18,8 +18,9 @@ Each steady-state window in `--windows` and the generational GA at the same popu
 once, after an untimed warm-up run. For each it prints: the fraction of worker-time spent busy
 (the stand-in's simulation seconds / (workers x wall), the wall from the coordinator's start to
 the run's last commit), the same in the middle 80 % of the wall, the share of that middle in
-which no job waited on the queue (sampled every 50 ms: the coordinator starved the workers) and
-the median gap between a worker's jobs (RQ's work on both sides of a job); the coordinator's CPU per birth (this process's CPU over the run: its
+which no job waited on the queue (sampled every 50 ms: a worker that finished a job then waited
+for the coordinator) and the median gap between a worker's jobs (RQ's work on both sides of a
+job, and any such wait); the coordinator's CPU per birth (this process's CPU over the run: its
 step, store and RQ client; the stand-in's arithmetic runs on the workers, so nothing is taken
 out), split into the run's driver thread, the batch threads (enqueue, BLPOP, decode, checks) and
 the rest; Redis commands (INFO commandstats) and read events (INFO stats `total_reads_processed`,

@@ -7,8 +7,9 @@ seconds per occupied voxel a robot costs in a kernel call of n robots (n = 1, 2,
 kernel's SIMD lanes make a robot cheaper in a fuller call), times the batch's occupied voxels.
 The fitness is a deterministic function of the robot (its share of actuated voxels, as
 `bench/coordinator.py`'s stand-in), so the run selects and converges, and its duplicates are
-found and not sent, as a real run's are; each robot has a record of measures, as a real job's.
-Only this module is imported by the workers: no physics, no kernels.
+found and not sent, as a real run's are; each robot has a record of measures (and its JSON
+text, where the real job sends one), as a real job's. Only this module is imported by the
+workers: no physics, no kernels.
 """
 
 from __future__ import annotations
@@ -23,12 +24,15 @@ from typing import Any
 from coordinator import job_output
 from rq import get_current_job
 
+from softevo.core import nulls
 from softevo.worker.jobs import push_result
 
 #: The environment variable holding the time model (`model_json`).
 MODEL_ENV = "SOFTEVO_SCALING_MODEL"
 #: The job function's import path, as the workers are told to allow it.
 FUNCTION = "scaling_job.sleep_batch"
+#: How the real job writes a record of measures as text, where it sends that text too.
+RECORD_TEXT = getattr(nulls, "record_text", None)
 
 
 def occupied(robot_file: dict[str, Any]) -> int:
@@ -69,5 +73,7 @@ def sleep_batch(batch_key: str, robot_files: list[dict[str, Any]]) -> dict[str, 
     job = get_current_job()
     worker = (job and job.worker_name) or f"{socket.gethostname()}:{os.getpid()}"
     payload: dict[str, Any] = dict(job_output([surrogate(f) for f in robot_files], "measures"))
+    if RECORD_TEXT is not None:  # a tree whose job sends each record's JSON text: so does this
+        payload["texts"] = [RECORD_TEXT(record) for record in payload["measures"]]
     payload.update(worker=worker, seconds=seconds, robots=len(robot_files), started=started)
     return push_result(batch_key, payload)

@@ -178,5 +178,6 @@ def place(module: str) -> str:
         if anchor in parts:
             return "/".join(parts[parts.index(anchor) + 1 :][:2])
     if path.is_relative_to(BENCH.parent):  # this checkout (installed editable)
-        return "softevo/" + str(path.relative_to(BENCH.parent))
+        inside = path.relative_to(BENCH.parent)
+        return ("" if inside.parts[0] == "bench" else "softevo/") + str(inside)
     return path.name if path.suffix else module
