@@ -5,6 +5,15 @@ import { api, box, h, status } from "./api.js";
 const words = (text) => String(text || "").split(/[\s,;]+/).filter(Boolean);
 
 export function sweepsPanel(presets) {
+  const form = sweepForm(presets);
+  const table = h("table", { id: "sweeps" });
+  const panel = h("div", {}, h("div", { class: "panel" }, h("h3", {}, "Start a sweep"), form),
+    h("div", { class: "panel" }, h("h3", {}, "Sweeps"), table));
+  return { panel, refresh: () => refreshSweeps(table) };
+}
+
+// The form that starts a sweep: over bounding boxes of a preset, or over task presets.
+function sweepForm(presets) {
   const tasks = presets.filter((p) => p.name.startsWith("task-"));
   const message = h("span", { class: "muted", id: "sweep-message" });
   const over = h("select", { name: "over" }, h("option", { value: "shapes" }, "bounding boxes"),
@@ -29,45 +38,46 @@ export function sweepsPanel(presets) {
   };
   over.addEventListener("change", showOver);
   showOver();
-  form.addEventListener("submit", async (event) => {
-    event.preventDefault();
-    const data = new FormData(form);
-    const request = { seeds: words(data.get("seeds")).map(Number) };
-    if (over.value === "tasks") request.tasks = data.getAll("tasks");
-    else {
-      request.preset = data.get("preset");
-      if (words(data.get("shapes")).length) request.shapes = words(data.get("shapes"));
-    }
-    for (const key of ["population", "generations"]) if (data.get(key)) request[key] = Number(data.get(key));
-    try {
-      const sweep = await api("/sweeps", { method: "POST", body: JSON.stringify(request) });
-      location.hash = `#/sweeps/${sweep.id}`;
-    } catch (error) {
-      message.className = "error";
-      message.textContent = error.message;
-    }
-  });
+  form.addEventListener("submit", (event) => startSweep(event, form, over, message));
+  return form;
+}
 
-  const table = h("table", { id: "sweeps" });
-  async function refresh() {
-    const page = await api("/sweeps?limit=50");
-    table.replaceChildren(
-      h("tr", {}, ["sweep", "status", "over", "seeds", "runs completed", "preset"].map((t) => h("th", {}, t))),
-      ...page.items.map((sweep) => {
-        const runs = sweep.boxes.reduce((n, b) => n + b.run_ids.length, 0);
-        const done = sweep.boxes.reduce((n, b) => n + b.completed, 0);
-        const byTask = sweep.boxes.some((b) => b.task);
-        return h("tr", { "data-sweep": sweep.id },
-          h("td", {}, h("a", { href: `#/sweeps/${sweep.id}` }, `sweep ${sweep.id}`)),
-          h("td", {}, status(sweep.status)),
-          h("td", {}, [...new Set(sweep.boxes.map((b) => (byTask ? b.task : box(b.shape))))].join(", ")),
-          h("td", { class: "num" }, (sweep.request.seeds || []).join(", ")),  // stored by the API
-          h("td", { class: "num" }, `${done}/${runs}`),
-          h("td", {}, sweep.request.preset || (byTask ? "each task's" : "paper-voxel")));
-      }));
-    if (!page.items.length) table.append(h("tr", {}, h("td", { colspan: 6, class: "muted" }, "No sweeps yet: start one above.")));
+// The form's sweep, started; its view opens, or the form says why not.
+async function startSweep(event, form, over, message) {
+  event.preventDefault();
+  const data = new FormData(form);
+  const request = { seeds: words(data.get("seeds")).map(Number) };
+  if (over.value === "tasks") request.tasks = data.getAll("tasks");
+  else {
+    request.preset = data.get("preset");
+    if (words(data.get("shapes")).length) request.shapes = words(data.get("shapes"));
   }
-  const panel = h("div", {}, h("div", { class: "panel" }, h("h3", {}, "Start a sweep"), form),
-    h("div", { class: "panel" }, h("h3", {}, "Sweeps"), table));
-  return { panel, refresh };
+  for (const key of ["population", "generations"]) if (data.get(key)) request[key] = Number(data.get(key));
+  try {
+    const sweep = await api("/sweeps", { method: "POST", body: JSON.stringify(request) });
+    location.hash = `#/sweeps/${sweep.id}`;
+  } catch (error) {
+    message.className = "error";
+    message.textContent = error.message;
+  }
+}
+
+// The list of the last 50 sweeps, read again.
+async function refreshSweeps(table) {
+  const page = await api("/sweeps?limit=50");
+  table.replaceChildren(
+    h("tr", {}, ["sweep", "status", "over", "seeds", "runs completed", "preset"].map((t) => h("th", {}, t))),
+    ...page.items.map((sweep) => {
+      const runs = sweep.boxes.reduce((n, b) => n + b.run_ids.length, 0);
+      const done = sweep.boxes.reduce((n, b) => n + b.completed, 0);
+      const byTask = sweep.boxes.some((b) => b.task);
+      return h("tr", { "data-sweep": sweep.id },
+        h("td", {}, h("a", { href: `#/sweeps/${sweep.id}` }, `sweep ${sweep.id}`)),
+        h("td", {}, status(sweep.status)),
+        h("td", {}, [...new Set(sweep.boxes.map((b) => (byTask ? b.task : box(b.shape))))].join(", ")),
+        h("td", { class: "num" }, (sweep.request.seeds || []).join(", ")),  // stored by the API
+        h("td", { class: "num" }, `${done}/${runs}`),
+        h("td", {}, sweep.request.preset || (byTask ? "each task's" : "paper-voxel")));
+    }));
+  if (!page.items.length) table.append(h("tr", {}, h("td", { colspan: 6, class: "muted" }, "No sweeps yet: start one above.")));
 }
