@@ -5,12 +5,17 @@ Drives `paper-voxel` runs (4x4x4, population 25) through the service's `Coordina
 and on PostgreSQL with an evaluator that simulates nothing (a robot's fitness is a cheap function
 of its file; a batch sleeps S seconds per robot, 0.05 by default, as a worker's wall time). Its
 batches come back as a real job's do: the job function's JSON output (with each robot's record of
-measures, or its heading in a tree of the release before records) turned into a `BatchResult` by
-the tree's own `BatchResult.measured`, so each tree's coordinator pays for what it keeps. The
-CPU seconds of the run's process, less the stand-in's own fitness arithmetic (a worker's work,
-timed with `thread_time`), are the coordinator's: breeding, robot files, batches, the store's
-writes and the generation commits. Each run is a fresh interpreter. Prints CPU per
-individual (ms), wall time per generation and generations of 25 committed per second.
+measures and, where the tree's job sends it, the record's text by the tree's own `record_text`;
+or its heading in a tree of the release before records) turned into a `BatchResult` by the
+tree's own `BatchResult.measured`, so each tree's coordinator pays for what it keeps. The CPU
+seconds of the run's process, less the stand-in's own work (its fitness arithmetic and output: a
+worker's, timed with `thread_time`), are the coordinator's: breeding, robot files, batches, the
+store's writes and the generation commits. Each run is a fresh interpreter, warmed up by a short
+run first, and freezes its heap once the coordinator has started (`gc.freeze()`), as the
+service does at start-up in both trees (`api.app`): otherwise a full pass of the cyclic
+collector over the start-up heap (40-55 ms here) falls inside one tree's measured run and not
+the other's by the phase of the collector's counters. Prints CPU per individual (ms), wall time
+per generation and generations of 25 committed per second.
 
 `--algorithms ga,map-elites` measures MAP-Elites runs (descriptors voxels and actuated, 10 x 10
 cells) interleaved with the GA's and prints MAP-Elites' CPU per individual against the GA's.
@@ -53,7 +58,12 @@ def modules(tree: str | None) -> dict[str, Any]:
     else:  # this checkout, or a staged one first on the path
         prefix, store = "softevo.", "softevo.api.store"
     load = importlib.import_module
+    try:  # the job's encoder of a record's text, in a tree whose job sends it
+        record_text = getattr(load(f"{prefix}core.nulls"), "record_text", None)
+    except ImportError:
+        record_text = None
     return {
+        "record_text": record_text,
         "Coordinator": load(f"{prefix}api.coordinator").Coordinator,
         "db": load(f"{prefix}api.db"),
         "create_run": load(store).create_run,
@@ -70,6 +80,7 @@ def instant_evaluator(found: dict[str, Any], sim_seconds: float = 0.0) -> Any:
     batch_result = found["BatchResult"]
     fields = getattr(batch_result, "__dataclass_fields__", {})
     form = "measures" if "measures" in fields else "heading" if "heading" in fields else None
+    record_text = found["record_text"] if form == "measures" else None
 
     class Instant:
         concurrency = 2
@@ -86,7 +97,7 @@ def instant_evaluator(found: dict[str, Any], sim_seconds: float = 0.0) -> Any:
                 (f["voxels"].count("sine") + f["voxels"].count("neg_sine")) / len(f["voxels"])
                 for f in files
             ]  # fmt: skip
-            output = job_output(fitness, form)
+            output = job_output(fitness, form, record_text)
             with STAND_IN_LOCK:
                 STAND_IN_CPU[0] += time.thread_time() - started
             return output
@@ -125,10 +136,13 @@ MEASURES = (
 )  # fmt: skip
 
 
-def job_output(fitness: list[float], form: str | None) -> dict[str, list[Any]]:
+def job_output(
+    fitness: list[float], form: str | None, record_text: Any = None
+) -> dict[str, list[Any]]:
     """The job function's JSON output for these speeds: with each robot's record of measures
-    (`form` "measures", this layout), its heading alone (the release before records), or
-    neither. Values made up from the speed, but as many and as varied as a simulation's."""
+    (`form` "measures", this layout) and, where the tree's job sends them, the records' texts
+    by its own `record_text`; its heading alone (the release before records), or neither.
+    Values made up from the speed, but as many and as varied as a simulation's."""
     output: dict[str, list[Any]] = {"fitness": list(fitness)}
     if form == "heading":
         output["heading"] = [speed * 360.0 - 180.0 for speed in fitness]
@@ -138,6 +152,8 @@ def job_output(fitness: list[float], form: str | None) -> dict[str, list[Any]]:
              for k, name in enumerate(MEASURES)}
             for speed in fitness
         ]  # fmt: skip
+        if record_text is not None:
+            output["texts"] = [record_text(record) for record in output["measures"]]
     return output
 
 

@@ -24,7 +24,7 @@ from concurrent.futures.process import BrokenProcessPool
 from typing import Any
 
 from softevo.core.evaluator import BatchResult, Evaluator, Measures, refuse_dropped
-from softevo.core.nulls import to_null, to_null_record
+from softevo.core.nulls import record_text, to_null, to_null_record
 from softevo.core.objectives import NEEDS_ENERGY
 from softevo.core.physics import simulate, simulate_batch
 from softevo.core.robot import Robot, VoxelRobot
@@ -35,7 +35,8 @@ from softevo.core.settings import sim_settings
 def evaluate_robot_files(robot_files: Sequence[dict[str, Any]]) -> Measures:
     """The job function: robot files in, each one's `fitness` (its file's `objective`, speed by
     default; None: failed) and record of `measures` (`SimResult.measures`, None for a value not
-    measured, the whole record None for a robot that could not be built) out, JSON-safe."""
+    measured, the whole record None for a robot that could not be built) out, JSON-safe, with
+    each record's JSON text (`texts`), made here so that the service stores it as it comes."""
     robots: list[Robot | None] = []
     for document in robot_files:
         try:
@@ -55,7 +56,8 @@ def evaluate_robot_files(robot_files: Sequence[dict[str, Any]]) -> Measures:
         result, objective = next(simulated) if robot is not None else (None, "")
         fitness.append(None if result is None else to_null(result.measure(objective)))
         measures.append(None if result is None else to_null_record(result.measures()))
-    return {"fitness": fitness, "measures": measures}
+    texts = [None if record is None else record_text(record) for record in measures]
+    return {"fitness": fitness, "measures": measures, "texts": texts}
 
 
 def _timed(name: str, evaluate: Callable[[], Measures]) -> BatchResult:

@@ -26,10 +26,13 @@ from typing import Any, Self
 import numpy as np
 
 from softevo.core.limits import BATCH_SIZE, IN_FLIGHT
-from softevo.core.nulls import from_null, from_null_record, from_nulls
+from softevo.core.nulls import Record, from_null, from_null_record, from_nulls
 
-#: The job function's output, JSON-safe: `fitness`, a number or None (failed) per robot, and
-#: `measures`, a record per robot (name -> number or None; None: no record), see `BatchResult`.
+#: The job function's output, JSON-safe: `fitness`, a number or None (failed) per robot,
+#: `measures`, a record per robot (name -> number or None; None: no record), see `BatchResult`,
+#: and `texts`, each record's JSON text (`record_text`; None: no record), which the service
+#: stores as it came instead of encoding the record again (optional: a worker of the release
+#: before texts sends none).
 Measures = dict[str, list[Any]]
 
 
@@ -52,6 +55,9 @@ class BatchResult:
         fitness = from_nulls(measured["fitness"])
         if "measures" in measured:
             records = [from_null_record(record) for record in measured["measures"]]
+            for record, text in zip(records, measured.get("texts") or (), strict=False):
+                if text is not None and isinstance(record, Record):
+                    record.text = text  # the store writes it as it came
         elif "heading" in measured:
             records = [{"heading": from_null(value)} for value in measured["heading"]]
         else:
@@ -82,7 +88,30 @@ def well_formed(measured: dict[str, Any], robots: int) -> bool:
             or (isinstance(record, dict) and _numbers(list(record.values()), len(record)))
             for record in records
         )
+        and ("texts" not in measured or _texts(measured["texts"], records))
     )
+
+
+def _texts(texts: Any, records: list[dict[str, Any] | None]) -> bool:
+    """Each record's JSON text, or None: a text that reads back as exactly its record (so what
+    the service stores is what the strategies were told), none for a robot without one."""
+    if not isinstance(texts, list) or len(texts) != len(records):
+        return False
+    for text, record in zip(texts, records, strict=True):
+        if text is None:
+            continue
+        if record is None or not isinstance(text, str):
+            return False
+        try:
+            if json.loads(text, parse_constant=_not_a_number) != record:
+                return False
+        except ValueError:
+            return False
+    return True
+
+
+def _not_a_number(name: str) -> Any:
+    raise ValueError(f"{name} in a record's text")
 
 
 def _numbers(values: Any, robots: int) -> bool:

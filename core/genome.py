@@ -41,13 +41,18 @@ class Genome:
 
         Real genes enter as their shortest round-trip repr, so equal floats hash equally.
         """
-        return json.dumps(self.to_json(), separators=(",", ":"), sort_keys=True)
+        return _CANONICAL(self.to_json())
 
     @cached_property
     def hash(self) -> str:
         """Stable across processes and machines: sha256 of the canonical JSON, 16 hex digits
         (computed once per genome: the genome is frozen)."""
         return hashlib.sha256(self.canonical.encode()).hexdigest()[:16]
+
+
+#: The canonical encoder, made once (`json.dumps` with options builds one per call: every bred
+#: genome is encoded, for its hash).
+_CANONICAL = json.JSONEncoder(separators=(",", ":"), sort_keys=True).encode
 
 
 def with_genome(fields: dict[str, Any], genome: Genome) -> str:

@@ -4,6 +4,7 @@ statistics of a generation where all failed) is `null` in JSON and NULL in the d
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Iterable, Mapping
 
@@ -34,12 +35,26 @@ def to_null_record(record: Mapping[str, float]) -> dict[str, float | None]:
 
 
 class Record(dict[str, float]):
-    """A record of measures read from JSON (name -> value, NaN for null) that keeps the JSON text
-    the store writes of it, once made (`text`): a genome met again (a survivor, a copy) has its
-    record written with every generation it is a member of, and it is this same object each
-    time. A record is never changed once read."""
+    """A record of measures read from JSON (name -> value, NaN for null) that keeps its JSON text
+    (`record_text`) once known (`text`): the job sends it beside the record, so the service
+    stores it as it came, and a genome met again (a survivor, a copy), whose record is this same
+    object every generation, is not encoded again. A record is never changed once read."""
 
     __slots__ = ("text",)
+
+
+def record_text(record: Mapping[str, float | None]) -> str:
+    """A record of measures as JSON text, the one form every copy of it takes (the job's, the
+    store's): compact, in the record's order, NaN, infinities and None as null. NaN is replaced
+    in the text (a measure's name, an identifier, never holds it) rather than in a copy first."""
+    text = _ENCODE(record)
+    if "Infinity" in text:  # not a number JSON knows either: the slow, exact way
+        return _ENCODE({name: to_null(value) for name, value in record.items()})
+    return text.replace("NaN", "null")
+
+
+#: One encoder for every record (`json.dumps` with options builds one per call).
+_ENCODE = json.JSONEncoder(separators=(",", ":")).encode
 
 
 def from_null_record(record: Mapping[str, float | None] | None) -> dict[str, float]:

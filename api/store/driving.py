@@ -9,7 +9,6 @@ the run can never write over its successor."""
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -21,7 +20,7 @@ from softevo.api.models import Generation, Individual, Run
 from softevo.api.store import leases
 from softevo.api.store.runs import now
 from softevo.api.store.statements import DriverStatement
-from softevo.core.nulls import Record, from_null, from_null_record, to_null, to_null_record
+from softevo.core.nulls import Record, from_null, from_null_record, record_text, to_null
 from softevo.core.status import IndividualStatus, RunStatus
 
 CURVE_FIELDS = (
@@ -204,26 +203,17 @@ def _fitness_rows(
 
 
 def measures_text(record: Mapping[str, float] | None) -> EncodedJSON:
-    """A record of measures as `individuals.measures` stores it: a compact JSON object, NaN as
-    null. Encoded once per record by the coordinator (a `Record` keeps its text for the
-    generations its genome is a member of again), and NaN is replaced in the text (a measure's
-    name, an identifier, never holds it) rather than in a copy of the record first."""
+    """A record of measures as `individuals.measures` stores it (`record_text`: a compact JSON
+    object, NaN as null): a `Record`'s text as the job sent it, else encoded here once (the
+    record keeps it for the generations its genome is a member of again)."""
     if not record:
         return EncodedJSON("{}")
-    known = getattr(record, "text", None)  # a `Record` written before (a cached genome's)
-    if known is not None:
-        return known
-    text = _ENCODE(record)
-    if "Infinity" in text:  # not a number JSON knows either: the slow, exact way
-        text = _ENCODE(to_null_record(record))
-    encoded = EncodedJSON(text.replace("NaN", "null"))
-    if isinstance(record, Record):
-        record.text = encoded
-    return encoded
-
-
-#: One encoder for every record (`json.dumps` with options builds one per call).
-_ENCODE = json.JSONEncoder(separators=(",", ":")).encode
+    text = getattr(record, "text", None)  # as the job sent it, or as written before
+    if text is None:
+        text = record_text(record)
+        if isinstance(record, Record):
+            record.text = text
+    return EncodedJSON(text)
 
 
 def _set_fitness(connection: Connection, rows: list[dict[str, Any]]) -> None:

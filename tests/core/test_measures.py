@@ -4,11 +4,13 @@ table of measures names each of them (adding one is a line in each place)."""
 
 from __future__ import annotations
 
+import json
 import math
 import re
 from pathlib import Path
 
 from softevo.core.evaluation import evaluate_robot_files
+from softevo.core.nulls import from_null_record, record_text
 from softevo.core.physics import simulate
 from softevo.core.robot import Actuation, VoxelRobot
 from softevo.core.robot_file import robot_to_json
@@ -40,9 +42,12 @@ def test_what_is_not_measured_is_nan_and_the_job_function_sends_it_as_null() -> 
     record = result.measures()
     assert all(math.isnan(record[name]) for name in ("energy", "cost_of_transport", "efficiency"))
     assert math.isfinite(record["speed"]) and record["stable"] == 1.0
-    (sent,) = evaluate_robot_files([robot_to_json(crawler())])["measures"]
+    output = evaluate_robot_files([robot_to_json(crawler()), {"format": "not a robot"}])
+    (sent, unbuilt), (text, no_text) = output["measures"], output["texts"]
     assert sent["energy"] is None and sent["speed"] == result.speed  # speed: no energy measured
-    assert sent.keys() == record.keys()
+    assert sent.keys() == record.keys() and unbuilt is None and no_text is None
+    # the record's text, as the service stores it: the same as the store would encode from it
+    assert json.loads(text) == sent and text == record_text(from_null_record(sent))
 
 
 def test_the_docs_table_names_every_measure_and_no_other() -> None:

@@ -22,6 +22,7 @@ from softevo.core.config import resolve
 from softevo.core.evaluation import SerialEvaluator
 from softevo.core.evaluator import BatchResult
 from softevo.core.ga.algorithm import GAState
+from softevo.core.nulls import Record, from_null_record
 from tests.api.store.test_store import OWNER, STATS, driven, members
 from tests.api.test_coordinator import wait_status
 from tests.reference import undisturbed
@@ -69,6 +70,17 @@ def test_a_record_is_stored_as_json_with_every_value_that_is_not_a_number_null()
         "speed": 0.1, "energy": None,
     }  # fmt: skip
     assert measures_text({}) == measures_text(None) == "{}"
+
+
+def test_a_record_read_from_json_is_encoded_once_and_as_a_plain_one() -> None:
+    """A cached genome's record is written again every generation: its text is made once."""
+    record = from_null_record({"speed": 0.1 + 0.2, "energy": None, "heading": EXACT})
+    assert isinstance(record, Record)
+    text = measures_text(record)
+    assert text == measures_text(dict(record)) and json.loads(text)["energy"] is None
+    assert record.text == text  # kept, not made again the next generation it is written
+    infinite = from_null_record({"efficiency": math.inf})
+    assert measures_text(infinite) == '{"efficiency":null}' == measures_text(infinite)
 
 
 def at_revision_0003(db: Database, objective: str) -> int:
