@@ -1,4 +1,6 @@
-"""`softevo reproduce --quick`: the whole reproduction, tiny, through a real `softevo serve`."""
+"""`softevo reproduce --quick`: the whole reproduction, tiny, through a real `softevo serve`, run
+once, by the installed wheel from a folder that is not the repository (`installed.py`: nothing may
+be read from the checkout, issue 19); `--resume` by the checkout's own."""
 
 from __future__ import annotations
 
@@ -13,6 +15,8 @@ import sys
 from pathlib import Path
 
 import pytest
+
+from tests.softevo.installed import clean_env, install_wheel
 
 FIGURES = [
     "fig4a_boxes.png", "fig4b_curve.png", "fig4c_population.png", "fig4d_diversity.png",
@@ -33,8 +37,16 @@ def reproduce(out: Path, *flags: str) -> subprocess.CompletedProcess[str]:
 
 @pytest.fixture(scope="module")
 def results(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    out = tmp_path_factory.mktemp("reproduce")
-    reproduce(out)
+    """The installed wheel's `softevo reproduce --quick` (one pool process: it compiles the
+    physics kernels for its own copy of the sources)."""
+    venv = install_wheel(tmp_path_factory.mktemp("installed"))
+    out, elsewhere = tmp_path_factory.mktemp("reproduce"), tmp_path_factory.mktemp("cwd")
+    done = subprocess.run(
+        [str(venv / "bin" / "softevo"), "reproduce", "--quick", "--workers", "1", "--out",
+         str(out)],
+        capture_output=True, text=True, cwd=elsewhere, env=clean_env(), timeout=600,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr
     return out
 
 
