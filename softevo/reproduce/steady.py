@@ -11,9 +11,12 @@
   shorter steady-state run is the longer one's first rows (births are numbered and bred from
   the seed alone), which is checked, so the matched run is steady-state on the GA's
   simulations, with a wall time of its own.
-* **Alone.** The private service drives one run at a time (`RUNNING`) on a pool of every core,
-  so a run's wall time is its own: the GA waits at every generation's barrier, steady-state keeps
-  up to W = P births in flight.
+* **Alone, and beside a GA run.** The private service drives one run at a time (`RUNNING`) on
+  a pool of every core, so a run's wall time is its own: the GA waits at every generation's
+  barrier, steady-state keeps up to W = P births in flight. Every steady-state run is submitted
+  right after a GA run of its box and seed (round 2 runs the GA again, which must give its
+  first curve), so that a machine shared with others loads both alike: the wall times are
+  compared in those pairs.
 * **No evaluation-time bias.** One matched run again in this process (`Evolution` on the local
   pool, the code path of `softevo run`), twice: as it is, and through `SizeTimed`, which holds
   each batch k s per voxel of its robots before it returns the real fitness, so small robots
@@ -56,6 +59,10 @@ QUICK: dict[str, Any] = {
 }  # fmt: skip
 GA, STEADY, LONG = "GA", "steady-state", "steady-state, the GA's births"
 METHODS = (GA, STEADY, LONG)
+GA_AGAIN = "GA, again"  # round 2's GA, run beside the matched steady-state run
+#: The GA run timed beside each method's (the same box and seed, the run before it; for the GA,
+#: its second run, whose difference says how much the machine's load moves a wall time).
+BESIDE = {GA: GA_AGAIN, STEADY: GA_AGAIN, LONG: GA}
 #: A batch's key names the birth it starts with (`core.stream.Flights.send`).
 _FIRST_BIRTH = re.compile(r"-b(\d+)-")
 
@@ -97,8 +104,9 @@ def run_steady(client: Client, quick: bool, workers: int | None) -> Results:
     _wait(client, results, first)
     second: dict[tuple[str, str, int], int] = {}
     for shape in plan["shapes"]:
-        for seed in plan["seeds"]:
+        for seed in plan["seeds"]:  # the GA again, so the matched run has one timed beside it
             rows = _match(results, box(shape), seed)
+            second[(box(shape), GA_AGAIN, seed)] = client.run(**request(plan, shape, seed, GA)).id
             config = {**request(plan, shape, seed, STEADY), "generations": rows}
             second[(box(shape), STEADY, seed)] = client.run(**config).id
     _wait(client, results, second)
@@ -136,6 +144,11 @@ def _match(results: Results, name: str, seed: int) -> int:
 def simulations(curve: list[dict[str, Any]], rows: int | None = None) -> int:
     """Simulations of a curve's first `rows` rows (all by default)."""
     return sum(row["evaluations"] for row in curve[:rows])
+
+
+def repeated(results: Results, name: str, seed: int) -> bool:
+    """Whether the GA run again in round 2 has its first curve, to the last digit."""
+    return results.curves[(name, GA, seed)] == results.curves[(name, GA_AGAIN, seed)]
 
 
 def prefix_holds(results: Results, name: str, seed: int) -> bool:

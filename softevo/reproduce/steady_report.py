@@ -11,6 +11,7 @@ from typing import Any
 from softevo.core import figures
 from softevo.reproduce.experiments import wall_seconds
 from softevo.reproduce.steady import (
+    BESIDE,
     GA,
     LONG,
     METHODS,
@@ -19,6 +20,7 @@ from softevo.reproduce.steady import (
     Results,
     box,
     prefix_holds,
+    repeated,
     simulations,
 )
 from softevo.reproduce.tables import fmt
@@ -38,6 +40,7 @@ def steady_rows(results: Results) -> list[dict[str, Any]]:
             best = [c[-1]["best_so_far"] for c in curves]
             sims = [simulations(c) for c in curves]
             walls = [wall_seconds(r) for r in runs]
+            beside = [wall_seconds(results.runs[(k[0], BESIDE[method], k[2])]) for k in keys]
             population = runs[0]["config"]["population"]
             rows.append({
                 "box": box(shape), "method": method,
@@ -48,6 +51,9 @@ def steady_rows(results: Results) -> list[dict[str, Any]]:
                 "births_by_seed": " ".join(str(len(c) * population) for c in curves),
                 "wall_by_seed": " ".join(f"{w:.1f}" for w in walls),
                 "wall_mean": statistics.fmean(walls), "wall_std": statistics.pstdev(walls),
+                "ga_beside_by_seed": " ".join(f"{w:.1f}" for w in beside),
+                "ga_beside_mean": statistics.fmean(beside),
+                "wall_ratio": sum(walls) / sum(beside),
                 "seconds_per_simulation": sum(walls) / sum(sims),
             })  # fmt: skip
     return rows
@@ -75,6 +81,9 @@ def _csv(path: Path, rows: list[dict[str, Any]]) -> None:
 def _table(results: Results, rows: list[dict[str, Any]]) -> list[str]:
     keys = [(box(s), seed) for s in results.plan["shapes"] for seed in results.plan["seeds"]]
     held = sum(prefix_holds(results, *key) for key in keys)
+    again = sum(repeated(results, *key) for key in keys)
+    ga = [r for r in rows if r["method"] == GA]
+    noise = statistics.fmean(abs(r["wall_ratio"] - 1) for r in ga)
     lines = [
         "# Steady-state against the paper's GA, on the same simulations",
         "",
@@ -82,17 +91,22 @@ def _table(results: Results, rows: list[dict[str, Any]]) -> list[str]:
         f"'{STEADY}': the rows of steady-state whose simulations stay within the GA's on that "
         f"box and seed; its curve is the first rows of '{LONG}' (as many births as the GA) in "
         f"{held} of {len(keys)} runs. Wall time: from the run's start to its end, as the API "
-        "reports them.",
+        "reports them. Each steady-state run was submitted right after a GA run of its box and "
+        f"seed, the one in 'GA beside it' (for '{STEADY}' the GA run again, which gave its first "
+        f"curve in {again} of {len(keys)} runs); the ratio is their total wall times'. In the GA "
+        f"rows, 'GA beside it' is that second GA run, and the ratio (off 1 by {noise:.0%} on "
+        "average) says how much the machine's load moved a run's wall time.",
         "",
         "| box | method | best speed, m/s (mean ± std) | by seed | simulations | births | wall "
-        "time, s (mean ± std) | by seed | s per simulation |",
-        "| --- | --- | ---: | --- | ---: | --- | ---: | --- | ---: |",
+        "time, s (mean ± std) | by seed | GA beside it, s | ratio | s per simulation |",
+        "| --- | --- | ---: | --- | ---: | --- | ---: | --- | ---: | ---: | ---: |",
     ]
     for r in rows:
         lines.append(
             f"| {r['box']} | {r['method']} | {fmt(r['best_mean'])} ± {fmt(r['best_std'])} | "
             f"{r['best_by_seed']} | {r['simulations_mean']:.0f} | {r['births_by_seed']} | "
             f"{r['wall_mean']:.1f} ± {r['wall_std']:.1f} | {r['wall_by_seed']} | "
+            f"{r['ga_beside_mean']:.1f} | {r['wall_ratio']:.2f} | "
             f"{r['seconds_per_simulation']:.3f} |"
         )
     return [*lines, ""]
@@ -142,7 +156,7 @@ def _figure(results: Results, rows: list[dict[str, Any]], path: Path) -> Path:
         ax.set_xlabel("simulations")
         _walls(axes[1][column], [r for r in rows if r["box"] == name])
     axes[0][0].set_ylabel("best speed so far (m/s)")
-    axes[1][0].set_ylabel("wall time, s\n(alone on the pool)")
+    axes[1][0].set_ylabel("wall time, s (alone;\nin pairs, as taken)")
     axes[0][-1].legend(fontsize=7, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     figure.suptitle("steady-state against the paper's GA (grey: the GA's simulations; dot: "
                     "steady-state on them)", fontsize=9)  # fmt: skip
@@ -151,11 +165,17 @@ def _figure(results: Results, rows: list[dict[str, Any]], path: Path) -> Path:
 
 
 def _walls(ax: Any, rows: list[dict[str, Any]]) -> None:
-    """Wall time per method: bars for the mean, dots for the seeds."""
-    labels = ["GA", "steady-state\n(GA's sims)", "steady-state\n(GA's births)"]
-    for x, row in enumerate(rows):
-        walls = [float(w) for w in row["wall_by_seed"].split()]
-        ax.bar(x, row["wall_mean"], color=COLOURS[row["method"]],
-               alpha=0.35 if row["method"] == LONG else 0.7)  # fmt: skip
+    """Wall times in the pairs they were taken in: each steady-state run beside the GA run
+    submitted just before it (bars: the mean; dots: the seeds)."""
+    by = {row["method"]: row for row in rows}
+    bars = [
+        ("GA,\nround 1", by[GA]["wall_by_seed"], COLOURS[GA]),
+        ("steady-state,\nGA's births", by[LONG]["wall_by_seed"], COLOURS[LONG]),
+        ("GA,\nround 2", by[GA]["ga_beside_by_seed"], COLOURS[GA]),
+        ("steady-state,\nGA's sims", by[STEADY]["wall_by_seed"], COLOURS[STEADY]),
+    ]
+    for x, (_, text, colour) in enumerate(bars):
+        walls = [float(w) for w in text.split()]
+        ax.bar(x, statistics.fmean(walls), color=colour, alpha=0.7)
         ax.scatter([x] * len(walls), walls, color="black", s=8, zorder=3)
-    ax.set_xticks(range(len(rows)), labels[: len(rows)], fontsize=7)
+    ax.set_xticks(range(len(bars)), [label for label, _, _ in bars], fontsize=7)

@@ -29,7 +29,9 @@ def test_steady_state_is_read_on_the_gas_simulations_and_timing_changes_nothing(
     timing = _rows(tmp_path / "timing.csv")[0]
     assert timing["curve_equal"] == timing["state_equal"] == timing["service_equal"] == "True"
     assert int(timing["batches"]) >= 1 and float(timing["held_seconds"]) > 0
-    assert "of 1 runs" in (tmp_path / "steady.md").read_text()
+    assert all(float(r["wall_ratio"]) > 0 for r in rows.values())
+    text = (tmp_path / "steady.md").read_text()
+    assert "in 1 of 1 runs" in text and "first curve in 1 of 1 runs" in text
     assert (tmp_path / "steady.png").read_bytes()[:4] == b"\x89PNG"
 
 
