@@ -90,7 +90,6 @@ class _Row:
     hooks: Hooks
     key: str
     waiting: deque[Birth] = field(default_factory=deque)
-    evaluated: set[int] = field(default_factory=set)  # row indices simulated for this row
 
     def keep(self, births: list[Birth]) -> None:
         """New births: kept by the hooks (which may know their fitness, after a takeover), and
@@ -98,14 +97,11 @@ class _Row:
         population = self.stepper.algorithm.config.population
         total = population * self.stepper.algorithm.config.generations
         births = [birth for birth in births if birth.number < total]  # past the end: never sent
-        rows: dict[int, dict[int, Birth]] = {}
-        for birth in births:
-            rows.setdefault(birth.number // population, {})[birth.number % population] = birth
-        for generation, members in rows.items():
-            individuals = {index: birth.individual for index, birth in members.items()}
+        for generation, members in _by_row(births, population).items():
+            individuals = {index: births[p].individual for index, p in members.items()}
             known, records = self.hooks.births(generation, individuals)
             for index, value in known.items():
-                genome_hash = members[index].individual.genome.hash
+                genome_hash = individuals[index].genome.hash
                 self.cache.setdefault(genome_hash, value)
                 self.measures.setdefault(genome_hash, records.get(index, {}))
         self.waiting.extend(birth for birth in births if not birth.saved)
@@ -130,16 +126,13 @@ class _Row:
         for birth, value, record in zip(births, result.fitness.tolist(), records, strict=True):
             self.cache[birth.individual.genome.hash] = value
             self.measures[birth.individual.genome.hash] = record
-        rows: dict[int, list[int]] = {}
-        for position, birth in enumerate(births):
-            rows.setdefault(birth.number // population, []).append(position)
-        for generation, positions in rows.items():
+        for generation, members in _by_row(births, population).items():
+            positions = list(members.values())
             part = BatchResult(
                 result.fitness[positions], result.worker,
                 result.seconds * len(positions) / len(births), [records[p] for p in positions],
             )  # fmt: skip
-            indices = [births[p].number % population for p in positions]
-            self.hooks.batch(generation, indices, part)
+            self.hooks.batch(generation, list(members), part)
 
 
 def stream_step(
@@ -187,6 +180,14 @@ def stream_step(
     return Step(
         individuals, fitness, records, evaluated, stats, following, time.perf_counter() - started
     )
+
+
+def _by_row(births: list[Birth], population: int) -> dict[int, dict[int, int]]:
+    """Births by the curve row (generation) they belong to: index in it -> position in `births`."""
+    rows: dict[int, dict[int, int]] = {}
+    for position, birth in enumerate(births):
+        rows.setdefault(birth.number // population, {})[birth.number % population] = position
+    return rows
 
 
 def _tell_known(row: _Row) -> None:
