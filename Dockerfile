@@ -32,7 +32,7 @@ USER softevo
 # of starting instead of compiling first. `-P`: /app/softevo, the source folder, must not stand
 # in for the installed package. On a CPU whose features differ from the build machine's, numba
 # compiles again by itself; it never computes differently.
-RUN python -P -c "from softevo.core.evaluation import warm_up; warm_up()" \
+RUN python -P -c "from softevo.core.physics.evaluation import warm_up; warm_up()" \
     && test -n "$(ls -A "$NUMBA_CACHE_DIR")"
 EXPOSE 8000
 CMD ["softevo", "serve", "--host", "0.0.0.0", "--port", "8000"]

@@ -56,7 +56,7 @@ def default_evaluator(settings: Settings) -> Evaluator:
         from softevo.worker.evaluator import RQEvaluator
 
         return RQEvaluator(settings.redis_url)
-    from softevo.core.evaluation import make_evaluator
+    from softevo.core.physics.evaluation import make_evaluator
 
     return make_evaluator(settings.workers)
 

@@ -1,7 +1,8 @@
 """The coordinator: drives runs generation by generation inside the API process.
 
 For each run it owns (see `store.leases`) it runs the one generation step of
-`softevo.core.generation` with persistence around it (`RunDriver`): the generation's individuals
+`softevo.core.search.generation` with persistence around it (`RunDriver`): the generation's
+individuals
 are kept before anything is evaluated, batches' fitness is saved as it lands (a batch that lands
 within `save_seconds` of the run's last write waits for the next one, so a generation of quick
 batches costs one transaction, not one per batch), and the generation (its remaining fitness,

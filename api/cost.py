@@ -11,7 +11,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from softevo.core.config import RunConfig
-from softevo.core.ga.vectors import needs_energy
+from softevo.core.search.vectors import needs_energy
 
 #: A stored individual's row beyond its genes (ids, hash, operator, parents, times), bytes.
 ROW_BYTES = 300

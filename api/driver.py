@@ -1,4 +1,4 @@
-"""One run driven by the coordinator: the generation step of `softevo.core.generation` with
+"""One run driven by the coordinator: the generation step of `softevo.core.search.generation` with
 persistence around it (`RunDriver`, the step's hooks). The generation's individuals are kept
 before anything is evaluated (a streaming strategy's births with the next write), batches'
 fitness is saved as it lands (a batch that lands within `save_seconds` of the run's last write
@@ -28,9 +28,9 @@ from softevo.api.store.driving import (
 )
 from softevo.core.config import RunConfig
 from softevo.core.evaluator import BatchResult, Evaluator
-from softevo.core.ga.algorithm import GAState, Individual, make_strategy
-from softevo.core.ga.state import parents_text
-from softevo.core.generation import Hooks, Step, Stepper
+from softevo.core.search.algorithm import GAState, Individual, make_strategy
+from softevo.core.search.generation import Hooks, Step, Stepper
+from softevo.core.search.state import parents_text
 from softevo.core.status import RunStatus
 
 log = logging.getLogger("softevo.coordinator")

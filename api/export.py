@@ -12,10 +12,10 @@ from typing import Annotated, Any, Literal
 from fastapi import Query, Response
 from fastapi.exceptions import RequestValidationError
 
-from softevo.core.export import MEDIA_TYPES, ExportError, export_robot
-from softevo.core.robot import Robot
+from softevo.core.outputs.export import MEDIA_TYPES, ExportError, export_robot
+from softevo.core.robots.robot import Robot
 
-ExportFormat = Literal["vxa", "glb", "stl"]  # softevo.core.export.FORMATS (a test checks)
+ExportFormat = Literal["vxa", "glb", "stl"]  # softevo.core.outputs.export.FORMATS (a test checks)
 
 FormatQuery = Annotated[
     ExportFormat | None,

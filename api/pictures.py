@@ -18,8 +18,8 @@ from collections import OrderedDict
 from typing import Any
 
 from softevo.api.replay import fps_bucket, in_own_process
-from softevo.core import picture
-from softevo.core.robot_file import robot_to_json
+from softevo.core.outputs import picture
+from softevo.core.robots.robot_file import robot_to_json
 
 #: Movies and thumbnails remembered (the newest).
 CACHED_MOVIES = 8

@@ -3,7 +3,7 @@ when the service has them (the API process then never loads the physics), else i
 processes of the API's own, which hand back JSON bytes (the API only splices them).
 
 A replay is asked for on a plain GET, so it is bounded: at most `MAX_POSITIONS` mass positions
-(`softevo.core.replay`), its fps rounded to a bucket, at most `RUNNING_AT_ONCE` simulated at
+(`softevo.core.outputs.replay`), its fps rounded to a bucket, at most `RUNNING_AT_ONCE` simulated at
 the same moment, one of them per client and pictures in one of them only (more are refused with
 503, never queued on a request thread), and the last few kept within `CACHED_BYTES`, so a
 dashboard refreshing, or many people watching one run, simulates a robot once.
@@ -25,7 +25,7 @@ from typing import Any
 from fastapi import Request, Response
 
 from softevo.core.limits import MAX_REPLAY_POSITIONS
-from softevo.core.robot_file import robot_to_json
+from softevo.core.robots.robot_file import robot_to_json
 
 #: Most mass positions one replay carries (frames x masses).
 MAX_POSITIONS = MAX_REPLAY_POSITIONS
@@ -167,7 +167,7 @@ def _simulate(robot: Any, fps: float) -> bytes:
         except RuntimeError as error:
             raise ReplayUnavailableError(str(error)) from None
         return json.dumps(data, separators=(",", ":"), allow_nan=False).encode()
-    from softevo.core.replay import replay_json
+    from softevo.core.outputs.replay import replay_json
 
     try:  # in a process of its own: its CPU and its encoding leave this one free
         return _processes().submit(replay_json, robot_to_json(robot), fps, MAX_POSITIONS).result()
@@ -183,7 +183,7 @@ def _processes() -> ProcessPoolExecutor:
     """The replays' own processes (RUNNING_AT_ONCE, niced, gone with this one), made on the
     first replay this process computes."""
     global _pool
-    from softevo.core.evaluation import start_pool_process
+    from softevo.core.physics.evaluation import start_pool_process
 
     with _lock:
         if _pool is None:

@@ -13,14 +13,14 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, StrictInt, create_model
 
 from softevo.core.config import PAPER_NINE_SHAPES, parse_shape
-from softevo.core.ga.algorithm import GAConfig
-from softevo.core.ga.vectors import MAX_OBJECTIVES
 from softevo.core.limits import MAX_SIDE
 from softevo.core.objectives import Objective
-from softevo.core.settings import SimSettings
+from softevo.core.robots.settings import SimSettings
+from softevo.core.robots.tasks import TASKS
+from softevo.core.robots.terrain import Terrain
+from softevo.core.search.algorithm import GAConfig
+from softevo.core.search.vectors import MAX_OBJECTIVES
 from softevo.core.status import IndividualStatus, RunStatus
-from softevo.core.tasks import TASKS
-from softevo.core.terrain import Terrain
 
 # Strict numbers in every body: no bool or string for a number, no float for a count.
 Side = Annotated[int, Field(ge=1, le=MAX_SIDE, strict=True)]

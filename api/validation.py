@@ -13,7 +13,7 @@ from typing import Any
 from softevo.api.cost import total_cost
 from softevo.api.settings import Limits
 from softevo.core.config import ConfigError, RunConfig, resolve
-from softevo.core.settings import SimSettings
+from softevo.core.robots.settings import SimSettings
 
 _FIELD = re.compile(r"^([A-Za-z_][\w.]*): ")
 

@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 from softevo.core.config import resolve
-from softevo.core.evaluation import warm_up
+from softevo.core.physics.evaluation import warm_up
 from softevo.core.physics.simulate import simulate, simulate_batch
 
 CASES = {  # name: terrain, measure energy

@@ -15,10 +15,10 @@ import time
 
 import numpy as np
 
-from softevo.core.cppn import CppnEncoding
 from softevo.core.physics.simulate import simulate
-from softevo.core.robot import build_mechanics
-from softevo.core.settings import SimSettings
+from softevo.core.robots.cppn import CppnEncoding
+from softevo.core.robots.robot import build_mechanics
+from softevo.core.robots.settings import SimSettings
 
 BOXES = ((4, 4, 4), (6, 6, 6), (8, 8, 8), (10, 10, 10))
 

@@ -81,10 +81,10 @@ def random_cells(draws: int = 2000) -> None:
     and `draws` spread 4x4x4 genomes fall in (why generation 0 and the immigrants matter)."""
     import numpy as np
 
-    from softevo.core.encodings import VoxelEncoding
-    from softevo.core.ga.archive import Archive
-    from softevo.core.ga.descriptors import describe
-    from softevo.core.ga.map_elites import spread_random
+    from softevo.core.robots.encodings import VoxelEncoding
+    from softevo.core.search.archive import Archive
+    from softevo.core.search.descriptors import describe
+    from softevo.core.search.map_elites import spread_random
 
     encoding, archive = VoxelEncoding((4, 4, 4)), Archive(("voxels", "actuated"), (8, 8))
     for name in ("uniform", "spread"):

@@ -39,9 +39,9 @@ import numba
 import numpy as np
 
 from softevo.core.physics import kernels, simulate, simulate_batch
-from softevo.core.robot import Actuation, Mechanics, VoxelRobot, build_mechanics
-from softevo.core.settings import SimSettings
-from softevo.core.tasks import TASKS
+from softevo.core.robots.robot import Actuation, Mechanics, VoxelRobot, build_mechanics
+from softevo.core.robots.settings import SimSettings
+from softevo.core.robots.tasks import TASKS
 
 ROOT = Path(__file__).resolve().parent.parent
 TARGETS = {"batch_per_core": 300e6, "single": 150e6}
@@ -177,8 +177,8 @@ FIRST_CALL_SCRIPT = textwrap.dedent(
     import json, time
     started = time.perf_counter()
     from softevo.core.physics import kernels, simulate, simulate_batch
-    from softevo.core.robot import VoxelRobot
-    from softevo.core.settings import SimSettings
+    from softevo.core.robots.robot import VoxelRobot
+    from softevo.core.robots.settings import SimSettings
     imported = time.perf_counter() - started
     robot = VoxelRobot((2, 2, 2), ("hard",) * 8, sim=SimSettings(duration=0.01, settle_time=0.0))
     started = time.perf_counter()

@@ -88,7 +88,7 @@ def measure(path: Path, route: str, repeat: int) -> dict[str, float]:
 
     from softevo.api.app import create_app
     from softevo.api.settings import Settings
-    from softevo.core.evaluation import SerialEvaluator
+    from softevo.core.physics.evaluation import SerialEvaluator
 
     settings = Settings(database_url=f"sqlite:///{path}", poll_seconds=60.0)
     seconds, added = [], []

@@ -9,9 +9,10 @@ robots for the service, then drives them from this process through `worker.evalu
 * `simple`: `softevo worker --worker-class simple`, RQ's `SimpleWorker`: the job runs in the warm
   worker itself, no fork;
 * `pool/simple` and `pool/fork`: RQ's `rq.worker_pool.WorkerPool` in one process that loads the
-  kernels first (`core.evaluation.warm_up`) and then forks its N workers (`SimpleWorker`s or
+  kernels first (`softevo.core.physics.evaluation.warm_up`) and then forks its N workers
+  (`SimpleWorker`s or
   forking `Worker`s), so they start warm;
-* `PoolEvaluator`: the in-process baseline, `softevo.core.evaluation.PoolEvaluator(n)`
+* `PoolEvaluator`: the in-process baseline, `softevo.core.physics.evaluation.PoolEvaluator(n)`
   with n batches in flight (the service's local path). Batches go to its process pool as the job
   function `worker.jobs.evaluate_batch`, which times itself like on an RQ worker.
 
@@ -54,11 +55,11 @@ from benchlib import OtherLoad, cpu_model, free_port, redis_version
 from rq import Worker
 
 from softevo.core.config import resolve
-from softevo.core.evaluation import PoolEvaluator, SerialEvaluator, evaluate_robot_files
-from softevo.core.evolution import Evolution
-from softevo.core.robot import VoxelRobot
-from softevo.core.robot_file import robot_to_json
-from softevo.core.settings import sim_settings
+from softevo.core.physics.evaluation import PoolEvaluator, SerialEvaluator, evaluate_robot_files
+from softevo.core.robots.robot import VoxelRobot
+from softevo.core.robots.robot_file import robot_to_json
+from softevo.core.robots.settings import sim_settings
+from softevo.core.search.evolution import Evolution
 from softevo.worker.evaluator import RQEvaluator
 from softevo.worker.jobs import evaluate_batch
 from softevo.worker.queue import connect
@@ -68,7 +69,7 @@ WORKER_POOL = """
 import sys
 from rq import SimpleWorker, Worker
 from rq.worker_pool import WorkerPool
-from softevo.core.evaluation import warm_up
+from softevo.core.physics.evaluation import warm_up
 from softevo.worker.queue import QUEUE, SERIALIZER, connect
 url, n, kind = sys.argv[1], int(sys.argv[2]), sys.argv[3]
 warm_up()

@@ -60,13 +60,13 @@ from rq import Worker
 
 from softevo.api.settings import Settings
 from softevo.core.config import resolve
-from softevo.core.evaluation import PoolEvaluator
 from softevo.core.evaluator import evaluate_in_batches, split_evenly
-from softevo.core.evolution import Evolution
-from softevo.core.ga.stats import CURVE_COLUMNS
-from softevo.core.robot import VoxelRobot
-from softevo.core.robot_file import robot_to_json
-from softevo.core.settings import sim_settings
+from softevo.core.physics.evaluation import PoolEvaluator
+from softevo.core.robots.robot import VoxelRobot
+from softevo.core.robots.robot_file import robot_to_json
+from softevo.core.robots.settings import sim_settings
+from softevo.core.search.evolution import Evolution
+from softevo.core.search.stats import CURVE_COLUMNS
 from softevo.local_service import start_service
 from softevo.worker.queue import connect
 

@@ -40,10 +40,10 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import spearmanr
 
-from softevo.core.export import ExportError, export_robot
+from softevo.core.outputs.export import ExportError, export_robot
 from softevo.core.physics import simulate
-from softevo.core.robot import Robot, VoxelRobot, build_mechanics
-from softevo.core.robot_file import load_robot
+from softevo.core.robots.robot import Robot, VoxelRobot, build_mechanics
+from softevo.core.robots.robot_file import load_robot
 
 ROOT = Path(__file__).resolve().parent.parent
 BOXES = ("3x3x6", "4x4x3", "4x4x4", "5x5x3", "5x5x4", "5x5x5", "6x6x3", "6x6x6", "9x9x2")

@@ -1,6 +1,13 @@
-"""softevo's core (installed as `softevo.core`): voxel robots and robot files, the numba
-mass-spring engine, genome encodings, the genetic algorithm and its baselines, evaluators,
-metrics and figures.
+"""softevo's core (installed as `softevo.core`), in rooms that say what they hold, each
+importing only the rooms above it:
+
+    robots/    the voxel lattice, bodies, robot files, terrain, tasks and the genome encodings
+    physics/   the numba mass-spring engine, and robot files simulated into records of measures
+    search/    the strategies (ask/tell on JSON state), the generation step and `Evolution`
+    outputs/   figures, pictures, replays and exports (VXA, glTF, STL)
+
+and, shared by all of them: `config` (a run's configuration), `evaluator` (the one interface
+between search and physics), `objectives`, `limits`, `nulls` and `status`.
 
 Pure Python and numba: no database, no Redis, no web framework (import-linter's contract in
 pyproject.toml).

@@ -13,12 +13,12 @@ from typing import Any, Literal
 
 from pydantic import Field, ValidationError, field_validator, model_validator
 
-from softevo.core.encodings import PAPER_CUBE_OPTIONS, Encoding, make_encoding
-from softevo.core.ga.algorithm import GAConfig
 from softevo.core.limits import MAX_SIDE, MAX_VOXELS
 from softevo.core.objectives import Objective
-from softevo.core.settings import SimSettings, format_validation_error
-from softevo.core.tasks import TASKS, task_presets
+from softevo.core.robots.encodings import PAPER_CUBE_OPTIONS, Encoding, make_encoding
+from softevo.core.robots.settings import SimSettings, format_validation_error
+from softevo.core.robots.tasks import TASKS, task_presets
+from softevo.core.search.algorithm import GAConfig
 
 CubeOption = tuple[float, float, float, float]
 #: The paper's nine bounding boxes (Figure 4a), in its order.

@@ -14,11 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
-from softevo.core.encodings import PAPER_CUBE_OPTIONS
 from softevo.core.physics import simulate_batch
-from softevo.core.robot import LABELS, Actuation, SpringRobot, VoxelRobot
-from softevo.core.robot_file import dump_robot
-from softevo.core.settings import sim_settings
+from softevo.core.robots.encodings import PAPER_CUBE_OPTIONS
+from softevo.core.robots.robot import LABELS, Actuation, SpringRobot, VoxelRobot
+from softevo.core.robots.robot_file import dump_robot
+from softevo.core.robots.settings import sim_settings
 
 HERE = Path(__file__).parent
 

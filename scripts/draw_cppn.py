@@ -9,11 +9,11 @@ from pathlib import Path
 
 import numpy as np
 
-from softevo.core import figures
-from softevo.core.cppn import CppnEncoding, Network
-from softevo.core.cppn_variation import mutate_network
-from softevo.core.picture import thumbnail_png
-from softevo.core.settings import SimSettings
+from softevo.core.outputs import figures
+from softevo.core.outputs.picture import thumbnail_png
+from softevo.core.robots.cppn import CppnEncoding, Network
+from softevo.core.robots.cppn_variation import mutate_network
+from softevo.core.robots.settings import SimSettings
 
 SHAPE = (8, 8, 8)
 

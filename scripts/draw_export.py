@@ -10,10 +10,10 @@ import numpy as np
 import trimesh
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-from softevo.core import figures
-from softevo.core.export import Z_UP_TO_Y_UP, export_robot
-from softevo.core.robot import COLOURS
-from softevo.core.robot_file import load_robot
+from softevo.core.outputs import figures
+from softevo.core.outputs.export import Z_UP_TO_Y_UP, export_robot
+from softevo.core.robots.robot import COLOURS
+from softevo.core.robots.robot_file import load_robot
 
 ROOT = Path(__file__).resolve().parents[1]
 

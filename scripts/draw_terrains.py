@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from softevo.core import figures
-from softevo.core.settings import sim_settings
-from softevo.core.tasks import TASKS
+from softevo.core.outputs import figures
+from softevo.core.robots.settings import sim_settings
+from softevo.core.robots.tasks import TASKS
 
 
 def main() -> None:

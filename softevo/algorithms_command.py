@@ -6,8 +6,8 @@ import argparse
 import json
 from typing import Any
 
-from softevo.core.ga.algorithm import describe_strategies
-from softevo.core.ga.registry import GROUP
+from softevo.core.search.algorithm import describe_strategies
+from softevo.core.search.registry import GROUP
 
 
 def add_parser(commands: Any) -> None:

@@ -28,7 +28,7 @@ from softevo import (
     service_commands,
 )
 from softevo.command_error import CommandError
-from softevo.core.export import FORMATS
+from softevo.core.outputs.export import FORMATS
 
 
 def _positive_float(text: str) -> float:
@@ -43,7 +43,7 @@ def _positive_float(text: str) -> float:
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from softevo import library
-    from softevo.core.robot_file import RobotFileError
+    from softevo.core.robots.robot_file import RobotFileError
 
     fps = args.fps if args.trajectory else None
     try:
@@ -84,8 +84,8 @@ def _write_file(path: str, data: bytes, format: str) -> int:
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
-    from softevo.core.export import ExportError, export_robot, format_from_path
-    from softevo.core.robot_file import RobotFileError, load_robot
+    from softevo.core.outputs.export import ExportError, export_robot, format_from_path
+    from softevo.core.robots.robot_file import RobotFileError, load_robot
 
     named = format_from_path(args.out)
     if args.format and named and args.format != named:
@@ -134,8 +134,8 @@ def _add_export(commands: Any) -> None:
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
-    from softevo.core import picture
-    from softevo.core.robot_file import RobotFileError, load_robot
+    from softevo.core.outputs import picture
+    from softevo.core.robots.robot_file import RobotFileError, load_robot
 
     format = Path(args.out).suffix.lower().lstrip(".")
     if format not in picture.PICTURE_FORMATS:

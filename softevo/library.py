@@ -19,11 +19,17 @@ from typing import Any
 
 from softevo.core.config import ConfigError, RunConfig, resolve
 from softevo.core.evaluator import Evaluator
-from softevo.core.evolution import Evolution, Progress
-from softevo.core.front import front_rows
 from softevo.core.nulls import to_null, to_null_record
-from softevo.core.robot import Robot, build_mechanics, dropped_voxels
-from softevo.core.robot_file import RobotFileError, load_robot, parse_robot, robot_to_json, with_sim
+from softevo.core.robots.robot import Robot, build_mechanics, dropped_voxels
+from softevo.core.robots.robot_file import (
+    RobotFileError,
+    load_robot,
+    parse_robot,
+    robot_to_json,
+    with_sim,
+)
+from softevo.core.search.evolution import Evolution, Progress
+from softevo.core.search.front import front_rows
 
 __all__ = [
     "ConfigError",
@@ -142,7 +148,9 @@ class Run:
 
     def _evaluate_with(self) -> Evaluator:
         if self._evaluator is None:
-            from softevo.core.evaluation import make_evaluator  # the physics: loaded only to run
+            from softevo.core.physics.evaluation import (
+                make_evaluator,  # the physics: loaded only to run
+            )
 
             self._evaluator = make_evaluator(self.workers)
         return self._evaluator
@@ -257,8 +265,10 @@ def simulate(
     com_end, distance, speed, forward_speed, climb_rate, energy, cost_of_transport, wall_seconds,
     stable, dropped_voxels), and with `trajectory_fps` a `trajectory` (softevo.trajectory/1, that
     many frames per simulated second). `duration` and `terrain` override the file's sim."""
-    from softevo.core.evaluation import warm_up  # the physics (numba): loaded here, not above
     from softevo.core.physics import simulate as run_physics
+    from softevo.core.physics.evaluation import (
+        warm_up,  # the physics (numba): loaded here, not above
+    )
 
     if trajectory_fps is not None and not (math.isfinite(trajectory_fps) and trajectory_fps > 0):
         raise ValueError(f"trajectory_fps: must be a finite number > 0, got {trajectory_fps!r}")
@@ -269,7 +279,7 @@ def simulate(
     result, trajectory = run_physics(parsed, record_every=record_every)
     measures = {**result.to_json(), "dropped_voxels": dropped}
     if trajectory is not None:
-        from softevo.core.replay import finite_part
+        from softevo.core.outputs.replay import finite_part
 
         kept, blew_up_at = finite_part(trajectory)  # frames up to a blow-up: never NaN in JSON
         measures["trajectory"] = kept.to_json()

@@ -10,7 +10,7 @@ from typing import Any
 
 import httpx
 
-from softevo.core import figures
+from softevo.core.outputs import figures
 from softevo.results import read_results
 
 KINDS = ("all", "curve", "population", "diversity")

@@ -32,12 +32,12 @@ from pathlib import Path
 from typing import Any
 
 from softevo.core.config import ConfigError, resolve
-from softevo.core.evolution import Evolution
-from softevo.core.front import front_rows
-from softevo.core.ga.algorithm import GAState
-from softevo.core.ga.stats import curve_columns
 from softevo.core.limits import SAVE_SECONDS
 from softevo.core.nulls import from_null, from_null_record, to_null
+from softevo.core.search.algorithm import GAState
+from softevo.core.search.evolution import Evolution
+from softevo.core.search.front import front_rows
+from softevo.core.search.stats import curve_columns
 from softevo.library import Result
 
 

@@ -16,10 +16,10 @@ from pathlib import Path
 from typing import Any
 
 from softevo.core.config import ConfigError, RunConfig, resolve
-from softevo.core.encodings import Encoding, EncodingError
-from softevo.core.ga.registry import strategy_class
-from softevo.core.ga.state import GAState, Individual
-from softevo.core.genome import Genome
+from softevo.core.robots.encodings import Encoding, EncodingError
+from softevo.core.robots.genome import Genome
+from softevo.core.search.registry import strategy_class
+from softevo.core.search.state import GAState, Individual
 
 
 class ResumeError(ValueError):

@@ -12,13 +12,13 @@ from typing import Any
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-from softevo.core import figures
-from softevo.core.archive_figures import archive_figure
 from softevo.core.config import PRESET_DESCRIPTIONS, PRESETS, ConfigError, RunConfig, resolve
-from softevo.core.evolution import Evolution
-from softevo.core.front_figure import front_figure
-from softevo.core.ga.descriptors import CATALOGUE
 from softevo.core.objectives import OBJECTIVES
+from softevo.core.outputs import figures
+from softevo.core.outputs.archive_figures import archive_figure
+from softevo.core.outputs.front_figure import front_figure
+from softevo.core.search.descriptors import CATALOGUE
+from softevo.core.search.evolution import Evolution
 from softevo.library import Result, Run
 from softevo.results import (
     Checkpoints,

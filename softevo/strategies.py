@@ -10,11 +10,11 @@ service's takeover of a run all find it (docs/evolution.md, "A strategy of your 
 
 from __future__ import annotations
 
-from softevo.core.ga import operators
-from softevo.core.ga.registry import GROUP, StrategyError, strategies, strategy_class
-from softevo.core.ga.state import GAState, Individual
-from softevo.core.ga.strategy import NoOptions, Records, Strategy
-from softevo.core.ga.variation import mate, mutant
+from softevo.core.search import operators
+from softevo.core.search.registry import GROUP, StrategyError, strategies, strategy_class
+from softevo.core.search.state import GAState, Individual
+from softevo.core.search.strategy import NoOptions, Records, Strategy
+from softevo.core.search.variation import mate, mutant
 
 __all__ = [
     "GROUP", "GAState", "Individual", "NoOptions", "Records", "Strategy", "StrategyError",

@@ -31,7 +31,8 @@ def pytest_sessionstart(session: pytest.Session) -> None:
     if hasattr(session.config, "workerinput"):
         return
     code = (
-        "import sys; from softevo.core.evaluation import warm_up; warm_up(**{sys.argv[1]: False})"
+        "import sys; from softevo.core.physics.evaluation import warm_up; "
+        "warm_up(**{sys.argv[1]: False})"
     )
     warming = [  # each leaves one kernel out
         subprocess.Popen([sys.executable, "-P", "-c", code, skip]) for skip in ("batched", "alone")

@@ -3,7 +3,7 @@
 Written from the equations, not from the numba kernel, and kept as plain as possible: one
 vectorised NumPy pass per step, 3-vectors as rows of [M, 3] arrays, forces scattered with
 `np.add.at`, friction written with an explicit "stick or slide" choice. The kernel is tested
-against it in tests/core/test_physics.py.
+against it in tests/core/physics/test_physics.py.
 
 Per step n (t = n * dt, state x_n, v_n; all masses weigh m):
 
@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from softevo.core.robot import Mechanics
+from softevo.core.robots.robot import Mechanics
 
 #: Smallest spring length divided by (a collapsed spring exerts no force instead of 0 / 0).
 SPRING_LENGTH_FLOOR = 1e-12

@@ -20,7 +20,9 @@ from softevo.worker import queue
 
 
 def evaluate_batch(batch_key: str, robot_files: list[dict[str, Any]]) -> dict[str, Any]:
-    from softevo.core.evaluation import evaluate_robot_files  # loaded (and warm) in the worker
+    from softevo.core.physics.evaluation import (
+        evaluate_robot_files,  # loaded (and warm) in the worker
+    )
 
     started = time.perf_counter()
     job = get_current_job()  # the worker's name is on the job for every worker class
@@ -37,9 +39,9 @@ def replay(
     batch_key: str, robot_files: list[dict[str, Any]], fps: float, max_positions: int
 ) -> dict[str, Any]:
     """A replay job: the one robot of `robot_files` simulated with its frames recorded
-    (`softevo.core.replay`), pushed like a batch's result with its speed as the fitness."""
-    from softevo.core.replay import replay_frames
-    from softevo.core.robot_file import RobotFileError, parse_robot
+    (`softevo.core.outputs.replay`), pushed like a batch's result with its speed as the fitness."""
+    from softevo.core.outputs.replay import replay_frames
+    from softevo.core.robots.robot_file import RobotFileError, parse_robot
 
     started = time.perf_counter()
     job = get_current_job()

@@ -37,7 +37,7 @@ def run_worker(
     allow: tuple[str, ...] = (),
 ) -> bool:
     """Warm up, then work until stopped (or, with `burst`, until the queue is empty)."""
-    from softevo.core.evaluation import warm_up
+    from softevo.core.physics.evaluation import warm_up
 
     started = time.perf_counter()
     warm_up()

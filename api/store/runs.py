@@ -18,8 +18,8 @@ from sqlalchemy.orm import defer
 from softevo.api.db import Database
 from softevo.api.models import Generation, Individual, Run, Sweep
 from softevo.core.config import RunConfig
-from softevo.core.ga.stats import CURVE_COLUMNS
 from softevo.core.nulls import to_null
+from softevo.core.search.stats import CURVE_COLUMNS
 from softevo.core.status import ACTIVE, RunStatus
 
 
@@ -340,7 +340,7 @@ def best_individual(db: Database, run: RunRecord) -> dict[str, Any] | None:
 
 def archive(db: Database, run_id: int) -> dict[str, Any] | None:
     """The run's quality-diversity archive as of its last committed generation
-    (`softevo.core.ga.archive.Archive.to_json()`), from its own column, never the GA state;
+    (`softevo.core.search.archive.Archive.to_json()`), from its own column, never the GA state;
     None before the first commit."""
     with db.read() as session:
         return session.scalar(select(Run.archive).where(Run.id == run_id))

@@ -1,7 +1,8 @@
 """Terrain contact for the kernels: how deep each point is in the ground, and the way out.
 
 Kept apart from `kernels` (which integrates) because it is geometry: one function per terrain
-kind of `softevo.core.terrain`, each a loop the compiler vectorises. The flat ground never comes
+kind of `softevo.core.robots.terrain`, each a loop the compiler vectorises. The flat ground never
+comes
 here (the kernels keep its original arithmetic).
 
 numba's cache of the kernels is keyed on kernels.py alone: after editing this module or
@@ -15,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from softevo.core.terrain import sincos
+from softevo.core.robots.terrain import sincos
 
 #: Options of every kernel: cached, callable without the GIL, plain IEEE arithmetic (numpy's error
 #: model and no fastmath), no bounds checks.
@@ -128,7 +129,7 @@ def _rough_pass(tp, x, y, z, step_factor, contact, near):
 def contact_pass(kind, tp, x, y, z, step_factor, contact, near):
     """Penetration depth (m) of every point into the terrain and the surface's unit outward
     normal there (depth 0 and normal e_z: no contact). `kind` and `tp` come from
-    `softevo.core.terrain.kernel_params`; see docs/physics.md "Terrain" for edges and faces.
+    `softevo.core.robots.terrain.kernel_params`; see docs/physics.md "Terrain" for edges and faces.
 
     Into `contact` [0:4]: one loop per kind, written with selects rather than branches, so the
     compiler vectorises it; `contact` [SCRATCH_ROWS, M] (`contact_scratch`) and `near` [M] are

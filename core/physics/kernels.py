@@ -22,7 +22,8 @@ F_m starts at (0, 0, m g) and takes its spring terms in spring order. No fastmat
 is plain IEEE double (no reassociation, no fused multiply-add), the same on every worker.
 
 **The batched layout.** `simulate_many` numbers the lattice points of a box (x fastest, then y, then
-z, like `softevo.core.lattice`) and stores each spring in a *slot* (q, p): the spring from point p
+z, like `softevo.core.robots.lattice`) and stores each spring in a *slot* (q, p): the spring from
+point p
 to point p + offsets[q], where `offsets` are the distinct positive index offsets of a point's 26
 neighbours in the box, ascending. A slot that is no spring of robot r (two points that are not
 neighbours, across the edge of the box, or a spring robot r lacks) has k = 0 in lane r; a point
@@ -153,7 +154,7 @@ def simulate_one(
     spring_a, spring_b,  # [S] int64 mass indices (the lattice's order: sorted, a < b)
     stiffness, rest, amp_sin, amp_cos,  # [S] float64
     omega, dt, n_steps, weight, ground_k, friction, damping,
-    terrain_kind, terrain,  # softevo.core.terrain.kernel_params
+    terrain_kind, terrain,  # softevo.core.robots.terrain.kernel_params
     settle_step, settle_x, settle_y, settle_z,  # positions copied when step == settle_step
     record_every, frames,  # frames [F, 3, M]: positions every record_every steps, and the last
     energy,  # [S] actuator work of each spring from settle_step on (J), or [0]: not measured
@@ -245,7 +246,7 @@ def simulate_many(
     offsets,  # [D] int64, ascending: slot (q, p) is the spring from point p to p + offsets[q]
     stiffness, rest, amp_sin, amp_cos,  # [D, P, B] float64, k = 0 where a slot is no spring
     omega, dt, n_steps, weight, ground_k, friction, damping,
-    terrain_kind, terrain,  # softevo.core.terrain.kernel_params
+    terrain_kind, terrain,  # softevo.core.robots.terrain.kernel_params
     settle_step, settle_x, settle_y, settle_z,  # [P, B]
     energy,  # [D, P, B] actuator work of each slot from settle_step on (J), or [0, 0, 0]
 ):  # fmt: skip

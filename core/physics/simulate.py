@@ -2,7 +2,7 @@
 
 `simulate` runs one robot (optionally recording a trajectory); `simulate_batch` runs many robots
 that share settings together in the SIMD kernel, split over threads, and gives bit-identical
-positions to running each alone (tests/core/test_physics.py checks this).
+positions to running each alone (tests/core/physics/test_physics.py checks this).
 """
 
 from __future__ import annotations
@@ -19,9 +19,9 @@ import numpy as np
 from softevo.core.nulls import to_null, to_nulls
 from softevo.core.objectives import OBJECTIVE_MEASURES, STANDARD_GRAVITY
 from softevo.core.physics import kernels
-from softevo.core.robot import Mechanics, Robot, build_mechanics
-from softevo.core.settings import SimSettings
-from softevo.core.terrain import kernel_params
+from softevo.core.robots.robot import Mechanics, Robot, build_mechanics
+from softevo.core.robots.settings import SimSettings
+from softevo.core.robots.terrain import kernel_params
 
 #: Robots per `simulate_many` call. 8 doubles fill one AVX-512 vector, and a batch of 8 solid
 #: 4x4x4 robots keeps its arrays in a 1 MB L2 cache: 4 to 8 measured fastest, 32 about 30 %

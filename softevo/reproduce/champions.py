@@ -9,7 +9,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from softevo.core import figures
+from softevo.core.outputs import figures
 from softevo.reproduce.experiments import Experiments
 from softevo.reproduce.plan import CLOCK
 from softevo.reproduce.tables import fmt
@@ -25,7 +25,7 @@ def shipped_robot_text(name: str) -> str:
 def breathing_cube(out: Path, quick: bool) -> dict[str, Any]:
     """The paper's phase 1: the shipped breathing cube, simulated here (one robot, no evolution)."""
     from softevo.core.physics import simulate
-    from softevo.core.robot_file import parse_robot, with_sim
+    from softevo.core.robots.robot_file import parse_robot, with_sim
 
     robot = parse_robot(json.loads(shipped_robot_text("breathing_cube.json")))
     if quick:
@@ -65,7 +65,7 @@ def champions(experiments: Experiments, out: Path) -> list[dict[str, Any]]:
     fitness clock of a few actuation periods can reward a transient lunge, and this shows
     which robots keep their speed."""
     from softevo.core.physics import simulate
-    from softevo.core.robot_file import parse_robot, with_sim
+    from softevo.core.robots.robot_file import parse_robot, with_sim
 
     rows = []
     for (experiment, variant), prefix in (

@@ -7,7 +7,7 @@ import statistics
 from pathlib import Path
 from typing import Any
 
-from softevo.core import figures
+from softevo.core.outputs import figures
 from softevo.reproduce.experiments import Experiments, Group
 from softevo.reproduce.plan import CLOCK
 

@@ -20,10 +20,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from softevo.client import Client
-from softevo.core.front import front_rows, front_values
-from softevo.core.ga import pareto
-from softevo.core.ga.nsga2 import n_survivors
-from softevo.core.ga.vectors import parse_objectives, reference_point
+from softevo.core.search import pareto
+from softevo.core.search.front import front_rows, front_values
+from softevo.core.search.nsga2 import n_survivors
+from softevo.core.search.vectors import parse_objectives, reference_point
 from softevo.reproduce.client import wait_runs
 
 #: Speed against cost of transport, with the hypervolume reference point every run of the

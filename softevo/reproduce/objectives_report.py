@@ -7,7 +7,7 @@ import csv
 from pathlib import Path
 from typing import Any
 
-from softevo.core import figures
+from softevo.core.outputs import figures
 from softevo.reproduce.objectives import (
     AGE_METHODS,
     COLLAPSE,

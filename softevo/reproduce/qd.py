@@ -120,7 +120,7 @@ def write_qd(
 
 
 def _bars(rows: list[dict[str, Any]], path: Path) -> Path:
-    from softevo.core import figures
+    from softevo.core.outputs import figures
 
     plt = figures.pyplot()
     boxes = list(dict.fromkeys(row["box"] for row in rows))
@@ -149,8 +149,8 @@ def _archives(archives: dict[tuple, Any], path: Path) -> Path:
     """Seed 1's archive of each variant on the middle box, as heat maps on one colour scale."""
     import numpy as np
 
-    from softevo.core import figures
-    from softevo.core.archive_figures import archive_grid
+    from softevo.core.outputs import figures
+    from softevo.core.outputs.archive_figures import archive_grid
 
     plt = figures.pyplot()
     shapes = list(dict.fromkeys(shape for shape, _, _ in archives))

@@ -40,7 +40,7 @@ from typing import Any
 from softevo.client import Client
 from softevo.core.config import resolve
 from softevo.core.evaluator import BatchResult, Evaluator
-from softevo.core.evolution import Evolution
+from softevo.core.search.evolution import Evolution
 
 #: Runs the private service drives at once: one, so that wall times are each run's own.
 RUNNING = 1
@@ -202,7 +202,7 @@ def overtaken(landed: list[int]) -> int:
 
 def timing_check(results: Results, workers: int | None) -> dict[str, Any]:
     """The matched run of `plan["timed"]` in this process, as it is and size-timed."""
-    from softevo.core.evaluation import make_evaluator  # loads the physics: not for --help
+    from softevo.core.physics.evaluation import make_evaluator  # loads the physics: not for --help
 
     plan = results.plan
     shape, seed = plan["timed"]
@@ -235,9 +235,9 @@ def timing_check(results: Results, workers: int | None) -> dict[str, Any]:
 
 def _warm(evaluator: Evaluator) -> None:
     """Start every pool process (each loads the kernels) before anything is timed."""
-    from softevo.core.robot import VoxelRobot
-    from softevo.core.robot_file import robot_to_json
-    from softevo.core.settings import sim_settings
+    from softevo.core.robots.robot import VoxelRobot
+    from softevo.core.robots.robot_file import robot_to_json
+    from softevo.core.robots.settings import sim_settings
 
     sim = sim_settings({"duration": 0.01, "settle_time": 0})
     file = robot_to_json(VoxelRobot((1, 1, 1), ("hard",), sim=sim))

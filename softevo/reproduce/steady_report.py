@@ -8,7 +8,7 @@ import statistics
 from pathlib import Path
 from typing import Any
 
-from softevo.core import figures
+from softevo.core.outputs import figures
 from softevo.reproduce.experiments import wall_seconds
 from softevo.reproduce.steady import (
     BESIDE,

@@ -1,4 +1,5 @@
-"""`softevo reproduce --tasks`: the task suite (core/tasks.py) through the API, the GA against
+"""`softevo reproduce --tasks`: the task suite (core/robots/tasks.py) through the API, the GA
+against
 random search on the same budget.
 
 One `POST /sweeps` over every task x seeds 1-3 (paper-voxel's GA, 4x4x4, 25 x 100); once a task's
@@ -15,7 +16,7 @@ from typing import Any
 
 from softevo.client import Client
 from softevo.core.objectives import OBJECTIVES, objective_label
-from softevo.core.tasks import TASKS
+from softevo.core.robots.tasks import TASKS
 from softevo.reproduce.client import wait_runs
 from softevo.reproduce.tables import fmt
 
@@ -114,7 +115,7 @@ def write_suite(rows: list[dict[str, Any]], out: Path, command: str, wall: float
 
 
 def _figure(rows: list[dict[str, Any]], path: Path) -> Path:
-    from softevo.core import figures
+    from softevo.core.outputs import figures
 
     plt = figures.pyplot()
     figure, axes = plt.subplots(1, len(rows), figsize=(2.3 * len(rows), 3.2))

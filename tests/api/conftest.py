@@ -21,7 +21,7 @@ from sqlalchemy.engine import make_url
 from softevo.api.app import create_app
 from softevo.api.db import Database, end_sessions, normalise_url, scratch_postgres
 from softevo.api.settings import Settings
-from softevo.core.evaluation import SerialEvaluator
+from softevo.core.physics.evaluation import SerialEvaluator
 
 POSTGRES = os.environ.get("SOFTEVO_TEST_POSTGRES", "postgresql://postgres@127.0.0.1:5432/test")
 

@@ -23,8 +23,8 @@ from softevo.api.models import Base, Individual
 from softevo.api.store import front as front_store
 from softevo.core import evaluator as batches
 from softevo.core.config import resolve
-from softevo.core.evaluation import SerialEvaluator
 from softevo.core.evaluator import BatchResult
+from softevo.core.physics.evaluation import SerialEvaluator
 from tests.reference import front_points, undisturbed
 
 REQUEST = {"preset": "quick", "seed": 5, "population": 8, "generations": 4}

@@ -12,7 +12,7 @@ from fastapi.testclient import TestClient
 from softevo.api.cost import OBJECTIVE_COST, TERRAIN_COST, box_springs, run_cost
 from softevo.api.settings import Limits
 from softevo.core.config import PAPER_NINE_SHAPES, resolve
-from softevo.core.lattice import full_lattice
+from softevo.core.robots.lattice import full_lattice
 
 
 @pytest.mark.parametrize("shape", [(1, 1, 1), (4, 4, 4), (3, 3, 6), (9, 9, 2), (2, 5, 3)])

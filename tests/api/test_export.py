@@ -1,5 +1,6 @@
 """`?format=vxa|glb|stl` on a run's best robot and on any individual: through the real app, the
-bytes equal what softevo.core.export writes for the robot file the JSON answer gives, with the
+bytes equal what softevo.core.outputs.export writes for the robot file the JSON answer gives, with
+the
 format's media type and a download name; a bad format or a robot the format cannot hold is a
 422 that says why."""
 
@@ -14,8 +15,8 @@ import trimesh
 from fastapi.testclient import TestClient
 
 from softevo.api.export import ExportFormat
-from softevo.core.export import FORMATS, MEDIA_TYPES, export_robot
-from softevo.core.robot_file import parse_robot
+from softevo.core.outputs.export import FORMATS, MEDIA_TYPES, export_robot
+from softevo.core.robots.robot_file import parse_robot
 from tests.api.test_api import start, wait_for
 
 

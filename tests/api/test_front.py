@@ -10,8 +10,8 @@ from fastapi.testclient import TestClient
 from softevo import library
 from softevo.api.cost import cost_factor
 from softevo.core.config import resolve
-from softevo.core.front import front_values
-from softevo.core.ga import pareto
+from softevo.core.search import pareto
+from softevo.core.search.front import front_values
 from tests.api.test_api import wait_for
 
 RUN = {"preset": "quick", "seed": 2, "shape": [2, 2, 2], "population": 6, "generations": 3,

@@ -13,8 +13,8 @@ from fastapi.testclient import TestClient
 from PIL import Image
 
 from softevo.api import pictures
-from softevo.core import picture
 from softevo.core.limits import MIN_PICTURE_FPS, SERVICE_PICTURE_FPS, SERVICE_PICTURE_SECONDS
+from softevo.core.outputs import picture
 from tests.api.test_api import start, wait_for
 
 

@@ -17,7 +17,7 @@ from fastapi.testclient import TestClient
 from softevo import client as client_module
 from softevo.api.app import create_app
 from softevo.api.settings import Settings
-from softevo.core.evaluation import SerialEvaluator
+from softevo.core.physics.evaluation import SerialEvaluator
 
 STATIC = Path(__file__).resolve().parents[2] / "api" / "dashboard" / "static"
 READS = ("/runs", "/runs/1", "/runs/1/curve", "/runs/1/archive", "/sweeps", "/presets",

@@ -12,8 +12,8 @@ from typing import Any
 import pytest
 
 from softevo.api import pictures, replay
-from softevo.core.robot import Actuation, VoxelRobot
-from softevo.core.settings import SimSettings
+from softevo.core.robots.robot import Actuation, VoxelRobot
+from softevo.core.robots.settings import SimSettings
 
 ROBOT = VoxelRobot((1, 1, 2), ("sine", "soft"), Actuation(0.1, 0.5, 0.0), SimSettings())
 

@@ -36,7 +36,7 @@ from schemathesis.python import asgi
 
 from softevo.api.app import create_app
 from softevo.api.settings import Limits, Settings
-from softevo.core.evaluation import SerialEvaluator
+from softevo.core.physics.evaluation import SerialEvaluator
 
 pytestmark = pytest.mark.slow
 

@@ -6,8 +6,8 @@ import pytest
 from fastapi.testclient import TestClient
 
 from softevo.core.physics import simulate
-from softevo.core.robot_file import parse_robot
-from softevo.core.tasks import TASKS
+from softevo.core.robots.robot_file import parse_robot
+from softevo.core.robots.tasks import TASKS
 from tests.api.finished import finished
 
 TINY = {

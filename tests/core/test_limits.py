@@ -8,7 +8,7 @@ import pytest
 from softevo.api.settings import Settings
 from softevo.core.config import ConfigError, resolve
 from softevo.core.limits import MAX_SIDE, MAX_VOXELS
-from softevo.core.robot_file import RobotFileError, parse_robot
+from softevo.core.robots.robot_file import RobotFileError, parse_robot
 
 
 def robot(shape: list[int]) -> dict:

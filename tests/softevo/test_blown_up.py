@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from softevo.core.picture import hold_last_finite
+from softevo.core.outputs.picture import hold_last_finite
 from tests.softevo.inprocess import softevo
 
 

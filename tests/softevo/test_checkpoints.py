@@ -12,8 +12,8 @@ import pytest
 
 from softevo import results
 from softevo.core.config import resolve
-from softevo.core.evaluation import SerialEvaluator
-from softevo.core.evolution import Evolution
+from softevo.core.physics.evaluation import SerialEvaluator
+from softevo.core.search.evolution import Evolution
 from softevo.results import Checkpoints, read_resumable
 
 CONFIG = {"preset": "quick", "population": 6, "generations": 4, "seed": 3, "shape": [2, 2, 2],

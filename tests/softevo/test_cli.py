@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from softevo.core.robot_file import load_robot
+from softevo.core.robots.robot_file import load_robot
 from tests.softevo.inprocess import softevo
 
 

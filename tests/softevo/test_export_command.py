@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 import trimesh
 
-from softevo.core.export import FORMATS, export_robot
-from softevo.core.robot_file import load_robot
+from softevo.core.outputs.export import FORMATS, export_robot
+from softevo.core.robots.robot_file import load_robot
 from tests.softevo.inprocess import softevo
 
 

@@ -7,7 +7,7 @@ from typing import Any
 
 import pytest
 
-from softevo.core import figures
+from softevo.core.outputs import figures
 from softevo.reproduce.figures import curves_figure
 
 CONFIG = {"shape": [3, 2, 2], "seed": 4, "preset": "quick", "objective": "speed", "sim": {}}

@@ -9,9 +9,9 @@ from pathlib import Path
 
 from PIL import Image
 
-from softevo.core import picture
 from softevo.core.config import PRESET_DESCRIPTIONS, resolve
-from softevo.core.robot_file import load_robot
+from softevo.core.outputs import picture
+from softevo.core.robots.robot_file import load_robot
 from tests.softevo.inprocess import softevo
 
 

@@ -16,9 +16,9 @@ from softevo.api.app import create_app
 from softevo.api.db import Database
 from softevo.api.settings import Settings
 from softevo.core.config import ConfigError, resolve
-from softevo.core.evaluation import SerialEvaluator
 from softevo.core.physics import simulate as core_simulate
-from softevo.core.robot_file import RobotFileError, load_robot, with_sim
+from softevo.core.physics.evaluation import SerialEvaluator
+from softevo.core.robots.robot_file import RobotFileError, load_robot, with_sim
 from tests.api.finished import finished
 from tests.softevo.inprocess import softevo
 

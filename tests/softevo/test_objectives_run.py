@@ -11,9 +11,9 @@ import numpy as np
 
 from softevo import library
 from softevo.core.config import resolve
-from softevo.core.front import front_values
-from softevo.core.ga import pareto
-from softevo.core.ga.vectors import objective_values, reference_point
+from softevo.core.search import pareto
+from softevo.core.search.front import front_values
+from softevo.core.search.vectors import objective_values, reference_point
 from softevo.results import read_results
 from tests.softevo.inprocess import softevo
 

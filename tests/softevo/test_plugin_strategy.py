@@ -21,8 +21,8 @@ from softevo import library
 from softevo.api.app import create_app
 from softevo.api.db import Database
 from softevo.api.settings import Settings
-from softevo.core.evaluation import SerialEvaluator
-from softevo.core.ga.registry import GROUP, strategies
+from softevo.core.physics.evaluation import SerialEvaluator
+from softevo.core.search.registry import GROUP, strategies
 from tests.api.finished import finished
 from tests.softevo.inprocess import softevo
 

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from softevo.core import picture
+from softevo.core.outputs import picture
 from tests.softevo.inprocess import softevo
 
 #: Rows at the top of a frame that hold the clock, which changes even on a still robot.
@@ -99,7 +99,7 @@ def test_check_counts_frames_and_names_the_limit() -> None:
 def test_thumbnail_is_a_png_of_the_stated_size(examples: Path) -> None:
     from io import BytesIO
 
-    from softevo.core.robot_file import load_robot
+    from softevo.core.robots.robot_file import load_robot
 
     data = picture.thumbnail_png(load_robot(examples / "crawler_4x4x4.json"))
     with Image.open(BytesIO(data)) as image:

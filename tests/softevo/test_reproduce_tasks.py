@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from softevo.cli import main
-from softevo.core.tasks import TASKS
+from softevo.core.robots.tasks import TASKS
 from softevo.local_service import free_port, service_env, start_service
 
 

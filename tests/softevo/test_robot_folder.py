@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from softevo.core.robot_file import RESULTS_ROBOT, RobotFileError, load_robot, robot_to_json
+from softevo.core.robots.robot_file import RESULTS_ROBOT, RobotFileError, load_robot, robot_to_json
 from tests.softevo.inprocess import softevo
 
 

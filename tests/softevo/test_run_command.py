@@ -13,7 +13,7 @@ import time
 from pathlib import Path
 from xml.etree import ElementTree
 
-from softevo.core.robot_file import load_robot
+from softevo.core.robots.robot_file import load_robot
 from tests.softevo.inprocess import softevo
 
 

@@ -7,10 +7,10 @@ import csv
 import json
 from pathlib import Path
 
-from softevo.core.archive_figures import archive_figure
 from softevo.core.config import resolve
-from softevo.core.evaluation import SerialEvaluator
-from softevo.core.evolution import Evolution
+from softevo.core.outputs.archive_figures import archive_figure
+from softevo.core.physics.evaluation import SerialEvaluator
+from softevo.core.search.evolution import Evolution
 from tests.softevo.inprocess import softevo
 
 

@@ -11,9 +11,9 @@ from pathlib import Path
 
 from softevo import library
 from softevo.core.config import resolve
-from softevo.core.evaluation import SerialEvaluator
-from softevo.core.evolution import Evolution
 from softevo.core.nulls import to_null
+from softevo.core.physics.evaluation import SerialEvaluator
+from softevo.core.search.evolution import Evolution
 from softevo.results import POPULATION_COLUMNS, Checkpoints, read_results, read_resumable
 from tests.softevo.inprocess import softevo
 

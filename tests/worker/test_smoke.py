@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from softevo.core.config import resolve
-from softevo.core.evaluation import SerialEvaluator
-from softevo.core.evolution import Evolution
-from softevo.core.robot_file import robot_to_json
+from softevo.core.physics.evaluation import SerialEvaluator
+from softevo.core.robots.robot_file import robot_to_json
+from softevo.core.search.evolution import Evolution
 from softevo.worker.evaluator import RQEvaluator
 
 pytestmark = pytest.mark.redis
@@ -62,8 +62,8 @@ def test_the_api_enqueues_without_loading_the_physics(redis_server, workers, tmp
     import subprocess
     import sys
 
-    from softevo.core.replay import replay_frames
-    from softevo.core.robot_file import parse_robot
+    from softevo.core.outputs.replay import replay_frames
+    from softevo.core.robots.robot_file import parse_robot
 
     workers.start("physics")
     workers.wait_ready("physics")

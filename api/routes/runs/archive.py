@@ -12,9 +12,9 @@ from softevo.api.routes.runs import router
 from softevo.api.routes.runs.lifecycle import NOT_FOUND, RunId
 from softevo.api.schemas import ArchiveCell, ArchivePublic, DescriptorAxis
 from softevo.core.config import RunConfig
-from softevo.core.ga.archive import Archive
-from softevo.core.ga.descriptors import CATALOGUE
-from softevo.core.robot_file import robot_to_json
+from softevo.core.robots.robot_file import robot_to_json
+from softevo.core.search.archive import Archive
+from softevo.core.search.descriptors import CATALOGUE
 
 
 @router.get("/{run_id}/archive", responses=NOT_FOUND)

@@ -14,9 +14,9 @@ from softevo.api.routes.runs.lifecycle import NOT_FOUND, RunId
 from softevo.api.schemas import FrontPoint, FrontPublic
 from softevo.api.store import front as front_store
 from softevo.core.config import RunConfig
-from softevo.core.front import front_rows
-from softevo.core.genome import Genome
-from softevo.core.robot_file import robot_to_json
+from softevo.core.robots.genome import Genome
+from softevo.core.robots.robot_file import robot_to_json
+from softevo.core.search.front import front_rows
 
 
 @router.get("/{run_id}/front", responses=NOT_FOUND)

@@ -30,9 +30,9 @@ from softevo.api.schemas import (
 )
 from softevo.api.validation import run_config
 from softevo.core.config import RunConfig
-from softevo.core.ga.stats import curve_columns
-from softevo.core.genome import Genome
-from softevo.core.robot_file import robot_to_json
+from softevo.core.robots.genome import Genome
+from softevo.core.robots.robot_file import robot_to_json
+from softevo.core.search.stats import curve_columns
 from softevo.core.status import IndividualStatus, RunStatus
 
 RunId = Annotated[int, Path(ge=1, le=2**31 - 1, description="run id")]

@@ -21,9 +21,9 @@ from softevo.api.routes.runs import router
 from softevo.api.routes.runs.lifecycle import NOT_FOUND, RunId, best_robot
 from softevo.api.schemas import Message
 from softevo.core.config import RunConfig
-from softevo.core.genome import Genome
 from softevo.core.limits import MIN_PICTURE_FPS, SERVICE_PICTURE_FPS, SERVICE_PICTURE_SECONDS
-from softevo.core.picture import FPS, MEDIA_TYPES, SECONDS
+from softevo.core.outputs.picture import FPS, MEDIA_TYPES, SECONDS
+from softevo.core.robots.genome import Genome
 
 #: pyplot keeps global state (its figure registry, rcParams): one figure at a time in this process
 _FIGURES = threading.Lock()
@@ -59,7 +59,7 @@ def get_figure(
     run_id: RunId, kind: Literal["curve", "population", "diversity"], db: DatabaseDep
 ) -> Response:
     """The learning curve, population dot plot or diversity chart as a publication PNG."""
-    from softevo.core import figures
+    from softevo.core.outputs import figures
 
     run = store.get_run(db, run_id)
     points = store.population_points(db, run_id) if kind == "population" else None

@@ -10,7 +10,7 @@ from typing import Any
 import httpx
 import pytest
 
-from softevo.core.picture import THUMBNAIL_SIZE
+from softevo.core.outputs.picture import THUMBNAIL_SIZE
 from tests.api.dashboard.live import wait
 from tests.api.dashboard.test_browser import SMALL, page, server, shot  # noqa: F401 (fixtures)
 

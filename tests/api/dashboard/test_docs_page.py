@@ -12,7 +12,7 @@ from fastapi.testclient import TestClient
 
 from softevo.api.app import create_app
 from softevo.api.settings import Settings
-from softevo.core.evaluation import SerialEvaluator
+from softevo.core.physics.evaluation import SerialEvaluator
 
 VENDOR = Path(__file__).resolve().parents[3] / "api" / "dashboard" / "static" / "vendor"
 

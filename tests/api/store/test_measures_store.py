@@ -19,10 +19,10 @@ from softevo.api.coordinator import Coordinator
 from softevo.api.db import Database, alembic_config
 from softevo.api.store.driving import GenerationCommit, Landed, measures_text
 from softevo.core.config import resolve
-from softevo.core.evaluation import SerialEvaluator
 from softevo.core.evaluator import BatchResult
-from softevo.core.ga.algorithm import GAState
 from softevo.core.nulls import Record, from_null_record
+from softevo.core.physics.evaluation import SerialEvaluator
+from softevo.core.search.algorithm import GAState
 from tests.api.store.test_store import OWNER, STATS, driven, members
 from tests.api.test_coordinator import wait_status
 from tests.reference import undisturbed

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from softevo.core.physics import kernels, simulate, simulate_batch
-from softevo.core.robot import Actuation, VoxelRobot, build_mechanics
-from softevo.core.settings import sim_settings
-from softevo.core.terrain import kernel_params
+from softevo.core.robots.robot import Actuation, VoxelRobot, build_mechanics
+from softevo.core.robots.settings import sim_settings
+from softevo.core.robots.terrain import kernel_params
 from tests import reference_physics as reference
 
 

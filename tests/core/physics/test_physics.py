@@ -32,9 +32,9 @@ import textwrap
 import numpy as np
 import pytest
 
-from softevo.core.lattice import full_lattice
 from softevo.core.physics import simulate, simulate_batch
-from softevo.core.robot import (
+from softevo.core.robots.lattice import full_lattice
+from softevo.core.robots.robot import (
     SPRING_LABELS,
     Actuation,
     LabelledSpringRobot,
@@ -43,7 +43,7 @@ from softevo.core.robot import (
     VoxelRobot,
     build_mechanics,
 )
-from softevo.core.settings import SimSettings, sim_settings
+from softevo.core.robots.settings import SimSettings, sim_settings
 from tests import reference_physics as reference
 from tests.conftest import ROOT
 
@@ -308,8 +308,8 @@ DETERMINISM_SCRIPT = textwrap.dedent(
     """
     import hashlib
     from softevo.core.physics import simulate
-    from softevo.core.robot import Actuation, VoxelRobot
-    from softevo.core.settings import SimSettings, sim_settings
+    from softevo.core.robots.robot import Actuation, VoxelRobot
+    from softevo.core.robots.settings import SimSettings, sim_settings
 
     sim = sim_settings({"duration": 1.0, "settle_time": 0.25, "omega": 4.0})
     labels = ("sine", "neg_sine", "hard", "soft", "sine", "empty", "hard", "neg_sine")
@@ -443,8 +443,8 @@ def test_a_robot_whose_integration_diverged_is_unstable_not_fast() -> None:
     won the run. Every such robot is unstable with a NaN speed; a robot at the paper's dt is
     stable, its springs nowhere near the stretch limit."""
     from softevo.core.config import resolve
-    from softevo.core.evolution import Evolution
     from softevo.core.physics.simulate import MAX_STRETCH
+    from softevo.core.search.evolution import Evolution
 
     request = {"preset": "quick", "seed": 4, "population": 16, "generations": 1}
     for dt, diverges in ((0.003, True), (0.0005, False)):

@@ -12,7 +12,7 @@ from softevo.core.physics.contact import (
     contact_pass,
     contact_scratch,
 )
-from softevo.core.terrain import Rough, kernel_params
+from softevo.core.robots.terrain import Rough, kernel_params
 
 FIELD = Rough(amplitude=0.2, wavelength=1.5, seed=4)
 

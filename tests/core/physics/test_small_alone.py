@@ -9,7 +9,7 @@ import pytest
 from softevo.core.config import resolve
 from softevo.core.physics import kernels, simulate, simulate_batch
 from softevo.core.physics.simulate import SMALL_WIDTH
-from softevo.core.settings import sim_settings
+from softevo.core.robots.settings import sim_settings
 
 SIM = {"duration": 1.0, "settle_time": 0.3}
 

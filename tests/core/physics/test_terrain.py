@@ -14,9 +14,9 @@ import pytest
 from numba import njit
 
 from softevo.core.physics import simulate, simulate_batch
-from softevo.core.robot import Actuation, VoxelRobot, build_mechanics
-from softevo.core.settings import SimSettings, sim_settings
-from softevo.core.terrain import FIRST_FEATURE_GAP, Rough, sincos
+from softevo.core.robots.robot import Actuation, VoxelRobot, build_mechanics
+from softevo.core.robots.settings import SimSettings, sim_settings
+from softevo.core.robots.terrain import FIRST_FEATURE_GAP, Rough, sincos
 from tests import reference_physics as reference
 
 TERRAINS = {
@@ -124,7 +124,7 @@ def test_a_rough_field_is_the_same_for_the_same_seed_in_another_process() -> Non
     grid = np.linspace(-5.0, 5.0, 41)
     here = terrain.surface(grid[:, None], grid[None, :])
     code = (
-        "import numpy as np, sys; from softevo.core.terrain import Rough; "
+        "import numpy as np, sys; from softevo.core.robots.terrain import Rough; "
         "g = np.linspace(-5.0, 5.0, 41); "
         "sys.stdout.write(Rough(amplitude=0.2, wavelength=2.0, seed=11)"
         ".surface(g[:, None], g[None, :]).tobytes().hex())"
@@ -160,7 +160,7 @@ def test_flat_by_default_and_named_flat_are_the_same_simulation() -> None:
 
 
 def test_an_unknown_terrain_is_refused_with_the_kinds_it_could_be() -> None:
-    from softevo.core.robot_file import RobotFileError, parse_robot, robot_to_json
+    from softevo.core.robots.robot_file import RobotFileError, parse_robot, robot_to_json
 
     document = robot_to_json(crawler({"kind": "flat"}))
     document["sim"]["terrain"] = {"kind": "stairs", "height": 1}

@@ -1,1 +1,0 @@
-"""The genetic algorithm: pure operators and an ask/tell algorithm on explicit, JSON-able state."""

@@ -1,0 +1,1 @@
+"""Outputs: figures, pictures, replays and exports (VXA, glTF, STL) of runs and robots."""

@@ -1,0 +1,63 @@
+"""Genomes: the plain data the genetic algorithm breeds, with a stable hash.
+
+A genome is a list of discrete genes (small integers, each with its own alphabet size) and a list
+of real genes (each with bounds). What the genes mean is the encoding's business
+(`softevo.core.robots.encodings`); the operators in `softevo.core.search.operators` only see
+integers and
+floats.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
+
+
+@dataclass(frozen=True)
+class Genome:
+    """One individual's genes. `encoding` names how they become a robot."""
+
+    encoding: str
+    discrete: tuple[int, ...]
+    real: tuple[float, ...] = ()
+
+    def to_json(self) -> dict[str, Any]:
+        return {"encoding": self.encoding, "discrete": list(self.discrete), "real": list(self.real)}
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> Genome:
+        return cls(
+            encoding=str(data["encoding"]),
+            discrete=tuple(int(g) for g in data["discrete"]),
+            real=tuple(float(g) for g in data.get("real", ())),
+        )
+
+    @cached_property
+    def canonical(self) -> str:
+        """The genome as canonical JSON (sorted keys, no spaces), computed once: what its hash
+        digests, and the text the service stores for it.
+
+        Real genes enter as their shortest round-trip repr, so equal floats hash equally.
+        """
+        return _CANONICAL(self.to_json())
+
+    @cached_property
+    def hash(self) -> str:
+        """Stable across processes and machines: sha256 of the canonical JSON, 16 hex digits
+        (computed once per genome: the genome is frozen)."""
+        return hashlib.sha256(self.canonical.encode()).hexdigest()[:16]
+
+
+#: The canonical encoder, made once (`json.dumps` with options builds one per call: every bred
+#: genome is encoded, for its hash).
+_CANONICAL = json.JSONEncoder(separators=(",", ":"), sort_keys=True).encode
+
+
+def with_genome(fields: dict[str, Any], genome: Genome) -> str:
+    """JSON text of `fields` plus `"genome": genome.to_json()`, the genome entering as its
+    canonical text (encoded once, for its hash) rather than encoded again."""
+    head = json.dumps(fields)[:-1]
+    return f'{head}{", " if fields else ""}"genome": {genome.canonical}}}'

@@ -1,0 +1,122 @@
+"""Simulation settings: every physical number the engine uses, with the paper's values as defaults.
+
+Where the paper gives a number (dt, damping, friction, ground stiffness, mass, the two spring
+stiffnesses, gravity) it is the default here. Where the paper is silent (duration, drop height,
+settling, how actuation genes map to rest lengths) the default is our choice; `docs/physics.md`
+says why. Every value is validated on construction so a bad setting is refused before anything runs.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from softevo.core.robots.terrain import Flat, Terrain
+
+#: Largest number of integration steps one simulation may take (duration / dt).
+MAX_STEPS = 20_000_000
+
+
+class SimSettings(BaseModel):
+    """Physical and numerical settings of one simulation. Units are SI (m, s, kg, N)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
+
+    dt: float = Field(0.0005, gt=0, le=0.01, description="integration time step (s)")
+    duration: float = Field(10.0, gt=0, le=3600, description="simulated time (s)")
+    gravity: float = Field(-9.81, ge=-1000, le=1000, description="acceleration along z (m/s^2)")
+    damping: float = Field(
+        0.99, gt=0, le=1, description="factor applied to every velocity each step; 1.0 = none"
+    )
+    ground_stiffness: float = Field(
+        10000.0, ge=0, le=1e8, description="penalty spring of the ground at z = 0 (N/m)"
+    )
+    friction: float = Field(0.6, ge=0, le=10, description="Coulomb friction coefficient")
+    mass: float = Field(0.1, gt=0, le=1e4, description="mass of every point (kg)")
+    edge_length: float = Field(1.0, gt=0, le=100, description="voxel edge length (m)")
+    drop_height: float = Field(
+        0.0, ge=0, le=1000, description="height of the robot's lowest point at t = 0 (m)"
+    )
+    omega: float = Field(
+        1.0, ge=0, le=1e4, description="angular frequency w of voxel actuation (rad/s)"
+    )
+    soft_stiffness: float = Field(500.0, ge=0, le=1e8, description="soft voxel springs (N/m)")
+    hard_stiffness: float = Field(2000.0, ge=0, le=1e8, description="hard voxel springs (N/m)")
+    actuated_stiffness: float = Field(
+        2000.0, ge=0, le=1e8, description="springs of sine / neg_sine voxels (N/m)"
+    )
+    offset_scale: float = Field(
+        0.1, ge=0, le=1, description="rest-length offset per unit of gene a (fraction of length)"
+    )
+    amplitude_scale: float = Field(
+        0.1, ge=0, le=1, description="rest-length amplitude per unit of gene b (fraction)"
+    )
+    settle_time: float = Field(
+        1.0, ge=0, description="time (s) at which the fitness clock and com_start start"
+    )
+    terrain: Terrain = Field(
+        default_factory=Flat,
+        description="the ground: flat (default), slope, steps, rough or hurdles (docs/tasks.md)",
+    )
+
+    @model_validator(mode="after")
+    def _check_times(self) -> SimSettings:
+        if self.settle_time >= self.duration:
+            raise ValueError(
+                f"settle_time: {self.settle_time} s must be shorter than duration "
+                f"({self.duration} s)"
+            )
+        steps = self.duration / self.dt  # may overflow to inf for a dt near zero
+        if not steps <= MAX_STEPS:
+            raise ValueError(
+                f"duration: duration / dt = {steps:.4g} steps, more than the limit of {MAX_STEPS}"
+            )
+        return self
+
+    @property
+    def n_steps(self) -> int:
+        """Number of integration steps: duration / dt, rounded to the nearest integer."""
+        return max(1, round(self.duration / self.dt))
+
+    @property
+    def settle_steps(self) -> int:
+        """Step at which the fitness clock starts."""
+        return round(self.settle_time / self.dt)
+
+    @property
+    def measured_time(self) -> float:
+        """Seconds between the fitness clock's start and the end of the simulation."""
+        return (self.n_steps - self.settle_steps) * self.dt
+
+
+def sim_settings(
+    overrides: dict[str, Any] | None = None, base: SimSettings | None = None
+) -> SimSettings:
+    """Return `base` (default: the paper's settings) with `overrides` applied and validated."""
+    merged = (base or SimSettings()).model_dump()
+    merged.update(overrides or {})
+    return SimSettings.model_validate(merged)
+
+
+def format_validation_error(error: ValidationError, prefix: str = "") -> str:
+    """One line naming every offending field, e.g. `sim.dt: Input should be greater than 0;
+    sim.mass: ...`: each problem is listed, none hidden behind a count."""
+    return "; ".join(_problem(problem, prefix) for problem in error.errors())
+
+
+#: Where pydantic puts the chosen kind of a tagged union in an error's location (`sim.terrain.
+#: steps.depth`): left out, so the field reads as it is written (`sim.terrain.depth`).
+_TAGGED = {"terrain": {"flat", "slope", "steps", "rough", "hurdles"}}
+
+
+def _problem(problem: Any, prefix: str) -> str:
+    parts = [str(part) for part in (prefix, *problem["loc"]) if part != ""]
+    parts = [p for i, p in enumerate(parts) if not (i and p in _TAGGED.get(parts[i - 1], ()))]
+    message = problem["msg"].removeprefix("Value error, ")
+    field, _, rest = message.partition(": ")
+    if parts and rest and field.isidentifier():  # a model-level check that names its field
+        parts, message = [*parts, field], rest
+    if not parts:
+        return message
+    return f"{'.'.join(parts)}: {message}"

@@ -1,0 +1,191 @@
+"""One generation step, the only one: ask -> split the generation into genomes whose fitness is
+known and new ones -> evaluate the new ones in batches, several in flight -> tell.
+
+`softevo run` (`softevo.core.search.evolution`) and the service's coordinator both run it; the
+coordinator adds persistence through `Hooks`, never a second copy of the loop, so an algorithm
+plugs in once and runs everywhere. Counting is the same for both: a genome seen in an earlier
+generation of the run is not simulated again (`saved`); within a generation, each distinct new
+genome is simulated once (`evaluations`), and one whose fitness a hook already holds (saved
+before a crash) is counted as evaluated but not simulated again. A streaming strategy
+(`steady-state`) is told one birth at a time instead, its births streamed to the evaluator
+(`softevo.core.search.stream`); its step still ends with one curve row, through the same hooks.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+
+from softevo.core.evaluator import BatchResult, Evaluator, evaluate_in_batches
+from softevo.core.limits import BATCH_SIZE, IN_FLIGHT
+from softevo.core.robots.encodings import Encoding
+from softevo.core.robots.robot_file import robot_to_json
+from softevo.core.robots.settings import SimSettings
+from softevo.core.search.algorithm import GAState, Individual, Strategy
+from softevo.core.search.stats import GenerationStats
+from softevo.core.search.stream import Flights, stream_step
+from softevo.core.search.vectors import needs_energy
+
+
+class Hooks:
+    """What happens around a step (persistence, cancellation); by default nothing."""
+
+    #: Set by another thread to have `check` called at once (a stop); without one, `check` is
+    #: called at least every `evaluator.CHECK_SECONDS` while batches run.
+    alarm: threading.Event | None = None
+
+    def check(self) -> float | None:
+        """Raise to stop the step (cancelled, lease lost, shutdown); called while batches run.
+        Returns the `time.monotonic()` from which a batch that lands goes to `batch` at once
+        (None: at the step's end is soon enough)."""
+        return None
+
+    def individuals(
+        self, generation: int, individuals: list[Individual]
+    ) -> tuple[dict[int, float], dict[int, dict[str, float]]]:
+        """The generation is about to be evaluated: keep it; return fitness already known for
+        some of its members (by index; NaN = failed), which are then not simulated again, and
+        the records of measures known for them (a member without one gets an empty record)."""
+        return {}, {}
+
+    def batch(self, generation: int, indices: list[int], result: BatchResult) -> None:
+        """One batch's fitness and measures landed (for `indices` of the generation, in
+        order)."""
+
+    def births(
+        self, generation: int, individuals: dict[int, Individual]
+    ) -> tuple[dict[int, float], dict[int, dict[str, float]]]:
+        """A streaming strategy bred these members of row `generation` (by index): keep them;
+        return what is known of them, as `individuals` does."""
+        return {}, {}
+
+    def flush(self) -> None:
+        """A streaming step's `check` said a write was due and no batch landed since: write
+        what waits."""
+
+
+@dataclass(frozen=True)
+class Step:
+    """What one generation step did, and the state after it."""
+
+    individuals: list[Individual]
+    fitness: np.ndarray  # of every individual, in order (NaN = failed)
+    measures: list[dict[str, float]]  # of every individual, in order (empty: none known)
+    evaluated: frozenset[int]  # indices whose fitness came from this step (not from the cache)
+    stats: GenerationStats
+    state: GAState  # the state after the generation was told
+    seconds: float
+
+
+@dataclass(frozen=True)
+class Stepper:
+    """What runs the generation step for one run (named apart from the database's engine and
+    the workers' physics fingerprint): an algorithm with the run's encoding and simulation
+    settings, and how it evaluates:
+    batches of at most `batch_size` robots, at most `in_flight` of them at once, each robot's
+    fitness measured by `objective`."""
+
+    algorithm: Strategy
+    sim: SimSettings
+    batch_size: int = BATCH_SIZE
+    in_flight: int = IN_FLIGHT
+    objective: str = "speed"
+
+    @property
+    def encoding(self) -> Encoding:
+        return self.algorithm.encoding
+
+    @cached_property
+    def sim_json(self) -> dict[str, Any]:
+        """The run's simulation settings as every robot file holds them, dumped once."""
+        return self.sim.model_dump()
+
+    def robot_file(self, individual: Individual) -> dict[str, Any]:
+        """The individual's robot file; one measured by another objective than `speed` says so
+        (a `speed` file stays as it always was, so are its batch keys), and one whose run's
+        objectives need the actuators' work asks for it."""
+        document = robot_to_json(self.encoding.to_robot(individual.genome, self.sim), self.sim_json)
+        if self.objective != "speed":
+            document["objective"] = self.objective
+        if self.energy:
+            document["energy"] = True
+        return document
+
+    @cached_property
+    def energy(self) -> bool:
+        """Whether the run's `objectives` read the actuators' work (its robot files ask for it;
+        a run without them sends the files it always did)."""
+        return needs_energy(self.algorithm.config.objectives)
+
+    def flights(self, evaluator: Evaluator, alarm: threading.Event | None) -> Flights:
+        """The run's batches in flight, kept across the steps of a streaming strategy."""
+        flights = self.__dict__.get("_flights")
+        if flights is None or flights.evaluator is not evaluator:
+            alarm = alarm or threading.Event()
+            flights = Flights(evaluator, self.batch_size, self.in_flight, alarm)
+            self.__dict__["_flights"] = flights
+        return flights
+
+    def step(
+        self,
+        state: GAState,
+        cache: dict[str, float],
+        evaluator: Evaluator,
+        hooks: Hooks | None = None,
+        key: str = "local",
+        measures: dict[str, dict[str, float]] | None = None,
+    ) -> Step:
+        """Run generation `state.generation`. `cache` (genome hash -> fitness of the run's
+        earlier generations) gains this generation's new genomes, and so does `measures`
+        (genome hash -> record of measures, beside it); `key` prefixes batch keys."""
+        hooks = hooks or Hooks()
+        measures = {} if measures is None else measures
+        if self.algorithm.streaming:
+            return stream_step(self, state, cache, evaluator, hooks, key, measures)
+        started = time.perf_counter()
+        generation = state.generation
+        individuals = self.algorithm.ask(state)
+        known, known_measures = hooks.individuals(generation, individuals)
+        hashes = [individual.genome.hash for individual in individuals]
+        first: dict[str, int] = {}
+        for index, genome_hash in enumerate(hashes):
+            if genome_hash not in cache and genome_hash not in first:
+                first[genome_hash] = index
+        todo = [index for index in first.values() if index not in known]
+        fitness = {index: known[index] for index in first.values() if index in known}
+        records = {index: known_measures.get(index, {}) for index in fitness}
+        if todo:
+            files = [self.robot_file(individuals[i]) for i in todo]
+
+            def landed(positions: list[int], result: BatchResult) -> None:
+                indices = [todo[p] for p in positions]
+                records.update(zip(indices, result.records(), strict=True))
+                hooks.batch(generation, indices, result)
+
+            values = evaluate_in_batches(
+                evaluator, files, f"{key}-gen{generation}", batch_size=self.batch_size,
+                in_flight=self.in_flight, check=hooks.check, on_batch=landed, alarm=hooks.alarm,
+                names=[hashes[i] for i in todo],  # a robot file is its genome's, in one run
+            )  # fmt: skip
+            fitness.update(zip(todo, values.tolist(), strict=True))
+        cache.update({hashes[index]: value for index, value in fitness.items()})
+        measures.update({hashes[index]: record for index, record in records.items()})
+        values = np.array([cache[h] for h in hashes], dtype=np.float64)
+        found = [measures.get(h, {}) for h in hashes]
+        evaluations = len(first)
+        following, stats = self.algorithm.tell(
+            state,
+            individuals,
+            values,
+            measures=found,
+            evaluations=evaluations,
+            saved=len(individuals) - evaluations,
+        )
+        seconds = time.perf_counter() - started
+        evaluated = frozenset(first.values())
+        return Step(individuals, values, found, evaluated, stats, following, seconds)

@@ -1,0 +1,16 @@
+"""`random`: random search, the baseline every algorithm must beat on the same budget."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from softevo.core.search.state import GAState, Individual
+from softevo.core.search.strategy import Strategy
+
+
+class RandomSearch(Strategy):
+    name = "random"
+    summary = "random search: `population` new random genomes every generation"
+
+    def breed(self, state: GAState, rng: np.random.Generator) -> list[Individual]:
+        return self.first(rng)

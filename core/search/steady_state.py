@@ -1,0 +1,272 @@
+"""`steady-state`: asynchronous evolution that gives the same result on any number of workers.
+
+Births are numbered 0, 1, 2, ... Births 0 to P-1 (P the population) are random genomes; birth
+n >= P is bred from the population as it stands once births 0 .. n-W have been told, in birth
+order, where W (`window`, at most P) is how many births may be in flight at once. A result that
+lands early waits for the births before it, so the run depends on the seed alone: not on the
+number of workers, their speed, the backend or a takeover, and robots that simulate quickly gain
+nothing (the evaluation-time bias of asynchronous EAs, Scott & De Jong 2015, cannot arise).
+
+Parents: two tournaments of `tournament_size` among the population (or, with
+`parents: "archive"`, two elites drawn uniformly: a steady-state MAP-Elites), crossed and mutated
+as the GA does; with probability `immigrants` a birth is a random genome instead. Replacement:
+a told birth joins a population not yet full; after that it replaces the worst member if it is
+strictly better (the oldest of equally bad members goes first), so the best never falls and a
+failed robot never enters. Every P told births make one curve row ("generation").
+
+The births in flight live in `GAState.data["steady"]`, so a stored state resumes the same
+sequence; `Nursery` is the mutable working copy the generation step tells one birth at a time.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter, deque
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any, ClassVar, Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
+
+from softevo.core.search import operators
+from softevo.core.search.archive import Archive
+from softevo.core.search.state import GAState, Individual
+from softevo.core.search.stats import GenerationStats
+from softevo.core.search.strategy import Strategy
+from softevo.core.search.variation import mate
+
+if TYPE_CHECKING:
+    from softevo.core.search.algorithm import GAConfig
+
+#: The key of `GAState.data` holding the births in flight and the population's birth numbers.
+KEY = "steady"
+#: Mixed into every birth's seed, apart from the generations' (`generation_rng`).
+_BIRTHS = 0x5EED
+
+
+class SteadyStateOptions(BaseModel):
+    """The in-flight window and where parents come from."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
+
+    window: int | None = Field(
+        None,
+        ge=1,
+        le=10_000,
+        description="W, the births that may be in flight at once: birth n is bred once births "
+        "up to n-W are told. At most the population; null: the population. A larger W keeps "
+        "more workers busy, a smaller one selects on fresher results",
+    )
+    parents: Literal["population", "archive"] = Field(
+        "population",
+        description="population: two tournaments of tournament_size; archive: two elites "
+        "drawn uniformly from the archive (needs descriptors and bins): a steady-state "
+        "MAP-Elites",
+    )
+
+
+def birth_rng(seed: int, birth: int) -> np.random.Generator:
+    """The generator of birth `birth` of a run: a function of the seed and n only."""
+    return np.random.default_rng(np.random.SeedSequence([seed, _BIRTHS, birth]))
+
+
+@dataclass(frozen=True)
+class Birth:
+    """A bred individual, its number, and whether an earlier birth had its genome (`saved`:
+    it is not simulated again)."""
+
+    number: int
+    individual: Individual
+    saved: bool
+
+    def to_json(self) -> dict[str, Any]:
+        return {"n": self.number, "saved": self.saved, **self.individual.to_json()}
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> Birth:
+        return cls(int(data["n"]), Individual.from_json(data), bool(data["saved"]))
+
+
+class SteadyState(Strategy):
+    name = "steady-state"
+    summary = (
+        "asynchronous steady-state evolution: W births in flight, each bred as soon as a slot "
+        "frees and told in birth order, so the result does not depend on workers or timing"
+    )
+    uses = (
+        "population", "generations", "tournament_size", "crossover_probability",
+        "mutation_probability", "mutation_genes", "mutation_sigma", "immigrants",
+    )  # fmt: skip
+    Options = SteadyStateOptions
+    streaming: ClassVar[bool] = True
+
+    @classmethod
+    def check(cls, config: GAConfig) -> None:
+        window = config.options.get("window")
+        if isinstance(window, int) and window > config.population:
+            raise ValueError(
+                f"options.window: {window} is more than the population ({config.population}); "
+                "birth n >= P is bred from the first told births"
+            )
+        if config.options.get("parents") == "archive" and not config.descriptors:
+            raise ValueError('options.parents: "archive" needs descriptors and bins')
+
+    @property
+    def window(self) -> int:
+        return self.options.window or self.config.population  # type: ignore[attr-defined]
+
+    @property
+    def total(self) -> int:
+        return self.config.population * self.config.generations
+
+    def ask(self, state: GAState) -> list[Individual]:
+        """The births in flight (bred, not told), oldest first."""
+        return [birth.individual for birth in self.nursery(state).window]
+
+    def breed(self, state: GAState, rng: np.random.Generator) -> list[Individual]:
+        raise RuntimeError("steady-state breeds one birth at a time (Nursery.tell)")
+
+    def nursery(self, state: GAState, cache: Any = ()) -> Nursery:
+        """The working copy of `state` the step tells births to; `cache` (genome hashes
+        evaluated before) marks the first births of a new run that repeat a genome."""
+        last = self.__dict__.get("_last")
+        if last is not None and last.following is state:  # the state its last row gave
+            last.state, last.row, last.following = state, [], None
+            return last
+        kept = (state.data or {}).get(KEY)
+        if kept is None:  # a new run: births 0 .. W-1, random
+            nursery = Nursery(self, state, [], [], [], 0, deque())
+            for number in range(self.window):
+                nursery.add(number, self._random(state.seed, number), cache)
+            return nursery
+        window = deque(Birth.from_json(item) for item in kept["window"])
+        return Nursery(
+            self, state, list(state.previous or []), list(state.previous_fitness or []),
+            list(kept["births"]), int(kept["told"]), window,
+        )  # fmt: skip
+
+    def _random(self, seed: int, number: int) -> Individual:
+        return Individual(self.encoding.random(birth_rng(seed, number)), "random")
+
+    def bred(self, nursery: Nursery, number: int) -> Individual:
+        """Birth `number` (>= P), from the nursery's population and archive as they stand."""
+        config = self.config
+        rng = birth_rng(nursery.state.seed, number)
+        if number < config.population:
+            return Individual(self.encoding.random(rng), "random")
+        if rng.random() < config.immigrants:
+            return Individual(self.encoding.random(rng), "immigrant")
+        if self.options.parents == "archive" and nursery.archive is not None:  # type: ignore[attr-defined]
+            elites = nursery.archive.ordered()
+            if elites:
+                picks = [elites[int(i)] for i in rng.integers(0, len(elites), size=2)]
+                pair = (Individual(picks[0].genome, "elite"), Individual(picks[1].genome, "elite"))
+                child = mate(config, self.encoding, pair, (0, 1), rng)[0]
+                born = [elite.generation * config.population + elite.index for elite in picks]
+                return replace(child, parents=tuple(born[i] for i in child.parents))
+        fitness = np.asarray(nursery.fitness, dtype=np.float64)
+        picks = operators.tournament(fitness, 2, config.tournament_size, rng)
+        pair = (nursery.population[picks[0]], nursery.population[picks[1]])
+        child = mate(config, self.encoding, pair, (0, 1), rng)[0]
+        return replace(child, parents=tuple(nursery.births[int(picks[i])] for i in child.parents))
+
+
+@dataclass
+class Nursery:
+    """One row of a steady-state run being told, birth by birth (mutable; `finish` gives the
+    state). `population`, `fitness` and `births` are the members, their fitness and birth
+    numbers; `window` the births in flight, oldest first."""
+
+    strategy: SteadyState
+    state: GAState
+    population: list[Individual]
+    fitness: list[float]
+    births: list[int]
+    told: int
+    window: deque[Birth]
+    row: list[tuple[Individual, float, dict[str, float], bool]] = field(default_factory=list)
+    hashes: Counter[str] = field(default_factory=Counter)  # of the window's genomes
+    following: GAState | None = None  # the state `finish` gave
+
+    def __post_init__(self) -> None:
+        self.hashes.update(birth.individual.genome.hash for birth in self.window)
+        self.archive = None  # the archive as it stands, when parents are drawn from it
+        if self.strategy.options.parents == "archive":  # type: ignore[attr-defined]
+            config = self.strategy.config
+            kept = self.state.archive or Archive(config.descriptors, config.bins)
+            self.archive = kept.copy()
+
+    @property
+    def row_done(self) -> bool:
+        return len(self.row) == self.strategy.config.population
+
+    def add(self, number: int, individual: Individual, cache: Any) -> Birth:
+        """Birth `number` joins the window; it is `saved` if an earlier birth had its genome
+        (told: in `cache`; in flight: in the window)."""
+        genome_hash = individual.genome.hash
+        birth = Birth(number, individual, genome_hash in cache or genome_hash in self.hashes)
+        self.window.append(birth)
+        self.hashes[genome_hash] += 1
+        return birth
+
+    def tell(self, fitness: float, record: dict[str, float], cache: Any) -> Birth:
+        """The oldest birth in flight scored `fitness`: it joins the population (or not), and
+        the birth W later is bred and returned. It is bred past the run's last birth too (the
+        step never sends those), so a run resumed with more generations has the births an
+        uninterrupted longer run had."""
+        birth = self.window.popleft()
+        genome_hash = birth.individual.genome.hash
+        self.hashes[genome_hash] -= 1
+        if not self.hashes[genome_hash]:
+            del self.hashes[genome_hash]
+        self.row.append((birth.individual, fitness, record, birth.saved))
+        self._replace(birth, fitness)
+        if self.archive is not None:  # parents drawn from it: offered now, as `finish` will
+            index = len(self.row) - 1
+            self.strategy.offer(
+                self.archive, birth.individual, fitness, record, self.state.generation, index
+            )
+        self.told += 1
+        number = self.told - 1 + self.strategy.window
+        return self.add(number, self.strategy.bred(self, number), cache)
+
+    def _replace(self, birth: Birth, fitness: float) -> None:
+        if len(self.population) < self.strategy.config.population:
+            self.population.append(birth.individual)
+            self.fitness.append(fitness)
+            self.births.append(birth.number)
+            return
+        if math.isnan(fitness):
+            return
+        ranks = [(-math.inf if math.isnan(value) else value, birth)
+                 for value, birth in zip(self.fitness, self.births, strict=True)]  # fmt: skip
+        lowest = min(ranks)  # the worst fitness; of equals, the oldest birth
+        worst = ranks.index(lowest)
+        if fitness > lowest[0]:
+            self.population[worst] = birth.individual
+            self.fitness[worst] = fitness
+            self.births[worst] = birth.number
+
+    def finish(self) -> tuple[GAState, GenerationStats]:
+        """The state after the row's P births, and its curve row."""
+        individuals = [item[0] for item in self.row]
+        saved = sum(1 for item in self.row if item[3])
+        told, stats = Strategy.tell(
+            self.strategy, self.state, individuals, [item[1] for item in self.row],
+            measures=[item[2] for item in self.row], evaluations=len(self.row) - saved,
+            saved=saved,
+        )  # fmt: skip
+        data = {
+            **(told.data or {}),
+            KEY: {
+                "told": self.told,
+                "births": list(self.births),
+                "window": [birth.to_json() for birth in self.window],
+            },
+        }
+        state = replace(
+            told, previous=list(self.population), previous_fitness=list(self.fitness), data=data
+        )
+        self.following = state  # the next row goes on from this working copy, not from JSON
+        self.strategy.__dict__["_last"] = self
+        return state, stats

@@ -1,0 +1,236 @@
+"""The strategy protocol: what every search algorithm is, built in or installed by a user.
+
+A strategy is pure ask/tell over explicit state (`GAState`, which round-trips through JSON),
+in the spirit of evosax and pyribs. `ask(state)` gives the individuals to evaluate next;
+`tell(state, individuals, fitness, measures=...)` takes what they measured and returns the next
+state and one learning-curve row. Neither changes the state it is given, so whoever holds the
+state (`softevo run`, the library, the service's coordinator) decides when it becomes the current
+one. Nothing here assumes whole generations: "generation" is the state's counter of told
+batches, which a generational algorithm fills with one generation each and an asynchronous one
+with any number of births.
+
+Algorithms are found by name in the entry-point group `softevo.strategies`
+(`softevo.core.search.registry`); each declares its own settings as a pydantic model (`Options`),
+which `POST /runs` and `softevo run` validate under `"options"`. The shared `GAConfig` settings
+it reads are listed in `uses`, so `GET /algorithms` shows what each one honours.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Mapping, Sequence
+from dataclasses import replace
+from typing import TYPE_CHECKING, Any, ClassVar
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict
+
+from softevo.core.robots.encodings import Encoding
+from softevo.core.search import pareto
+from softevo.core.search.archive import Archive
+from softevo.core.search.descriptors import describe
+from softevo.core.search.state import GAState, Individual, generation_rng
+from softevo.core.search.stats import GenerationStats, generation_stats
+from softevo.core.search.vectors import objective_values, reference_point
+
+if TYPE_CHECKING:
+    from softevo.core.search.algorithm import GAConfig
+
+#: Each individual's record of measures (name -> value; NaN or missing: not measured).
+Records = Sequence[Mapping[str, float]]
+
+
+class NoOptions(BaseModel):
+    """A strategy with no settings of its own."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
+
+
+class Strategy(ABC):
+    """One search algorithm. Subclasses set `name`, `summary`, `uses` and `Options`, and
+    implement `breed`; the shared `tell` keeps the best so far, the archive and the curve row,
+    and a strategy that needs more overrides it (and may keep JSON in `GAState.data`; the key
+    `front` there is the shared `tell`'s, for a run with `objectives`)."""
+
+    name: ClassVar[str]
+    summary: ClassVar[str]
+    #: The shared `GAConfig` settings this strategy reads (shown by `GET /algorithms`).
+    uses: ClassVar[tuple[str, ...]] = ("population", "generations")
+    #: This strategy's own settings, validated from the run config's `options`.
+    Options: ClassVar[type[BaseModel]] = NoOptions
+    #: Whether `tell` hands `kept` each individual's objective values (NSGA-II, AFPO; the GA
+    #: with `weights` sets it per instance, from its options).
+    reads_objectives: bool = False
+    #: Whether the step tells this strategy one birth at a time (`steady_state.Nursery`)
+    #: rather than a whole generation at once.
+    streaming: ClassVar[bool] = False
+
+    def __init__(self, config: GAConfig, encoding: Encoding) -> None:
+        self.config = config
+        self.encoding = encoding
+        self.options = self.Options.model_validate(dict(config.options))
+
+    @classmethod  # noqa: B027 - optional: by default nothing to check
+    def check(cls, config: GAConfig) -> None:
+        """Raise ValueError (naming the field) for settings this strategy cannot run with."""
+
+    def start(self, seed: int) -> GAState:
+        return GAState(seed=seed)
+
+    def done(self, state: GAState) -> bool:
+        return state.generation >= self.config.generations
+
+    def ask(self, state: GAState) -> list[Individual]:
+        """The individuals to evaluate next (always the same for one state)."""
+        if self.done(state):
+            raise RuntimeError(f"the run has finished its {self.config.generations} generations")
+        if state.current is not None:
+            return list(state.current)
+        rng = generation_rng(state.seed, state.generation)
+        if state.generation == 0 or state.previous is None or state.previous_fitness is None:
+            return self.first(rng)
+        return self.breed(state, rng)
+
+    def first(self, rng: np.random.Generator) -> list[Individual]:
+        """The first individuals: `population` random genomes."""
+        population = self.config.population
+        return [Individual(self.encoding.random(rng), "random") for _ in range(population)]
+
+    @abstractmethod
+    def breed(self, state: GAState, rng: np.random.Generator) -> list[Individual]:
+        """The next individuals, from the last told ones (`state.previous`, their fitness
+        `state.previous_fitness`) or the archive, drawing only from `rng`."""
+
+    def tell(
+        self,
+        state: GAState,
+        individuals: list[Individual],
+        fitness: np.ndarray | list[float],
+        *,
+        measures: Records | None = None,
+        **counts: int,
+    ) -> tuple[GAState, GenerationStats]:
+        """The state after `individuals` (what `ask(state)` gave) scored `fitness` (NaN =
+        failed) and measured `measures`, and the curve row; `counts` (evaluations, saved, ...)
+        are stored with the row."""
+        values = np.asarray(fitness, dtype=np.float64)
+        if values.shape != (len(individuals),):
+            raise ValueError(
+                f"expected {len(individuals)} fitness values, got shape {values.shape}"
+            )
+        records: Records = measures if measures is not None else [{} for _ in individuals]
+        if len(records) != len(individuals):
+            raise ValueError(f"expected {len(individuals)} measures, got {len(records)}")
+        best = _best(state.best, individuals, values, state.generation)
+        archive = self.archive(state, individuals, values, records)
+        stats = generation_stats(
+            state.generation,
+            values,
+            [individual.genome for individual in individuals],
+            best[1] if best is not None else math.nan,
+            **counts,
+        )
+        if archive is not None:
+            stats = replace(stats, coverage=archive.coverage, qd_score=archive.qd_score)
+        data = state.data
+        objectives = self.config.objectives
+        vectors = None  # each individual's objective values, computed once for all who read them
+        if objectives or self.reads_objectives:
+            vectors = objective_values(objectives, records, values)
+        if objectives:
+            front = _front(state.data, vectors)
+            data = {**(state.data or {}), FRONT_KEY: front.tolist()}
+            volume = pareto.hypervolume(front, reference_point(objectives))
+            stats = replace(stats, hypervolume=volume, front_size=len(front))
+        if vectors is not None and self.reads_objectives:
+            data = {**(data or {}), **self.kept(state, individuals, vectors)}
+        following = GAState(
+            seed=state.seed,
+            generation=state.generation + 1,
+            current=None,
+            previous=list(individuals),
+            previous_fitness=values.tolist(),
+            best=best,
+            history=[*state.history, stats],
+            archive=archive,
+            data=data,
+        )
+        return following, stats
+
+    def kept(
+        self, state: GAState, individuals: list[Individual], values: np.ndarray
+    ) -> dict[str, Any]:
+        """What a strategy with `reads_objectives` keeps in `GAState.data` (JSON) of a told
+        batch whose maximised objective values are `values` ([N, M]); nothing by default."""
+        return {}
+
+    def archive(
+        self, state: GAState, individuals: list[Individual], fitness: np.ndarray, records: Records
+    ) -> Archive | None:
+        """The archive after these individuals (None for a run without descriptors): each
+        robot that did not fail is offered to the cell its descriptors (of its body, and of
+        its measures) fall in."""
+        config = self.config
+        if not config.descriptors:
+            return None
+        archive = (state.archive or Archive(config.descriptors, config.bins)).copy()
+        measured = zip(individuals, fitness, records, strict=True)
+        for index, (individual, value, record) in enumerate(measured):
+            self.offer(archive, individual, float(value), record, state.generation, index)
+        return archive
+
+    def offer(
+        self,
+        archive: Archive,
+        individual: Individual,
+        value: float,
+        record: Mapping[str, float],
+        generation: int,
+        index: int,
+    ) -> None:
+        """Offer one robot that did not fail to the cell its descriptors fall in."""
+        if math.isfinite(value):
+            labels = self.encoding.labels(individual.genome)
+            values = describe(self.config.descriptors, labels, self.encoding.shape, record)
+            archive.add(values, value, generation, index, individual.genome)
+
+    @classmethod
+    def describe(cls) -> dict[str, Any]:
+        """What `GET /algorithms` and `softevo algorithms` show of this strategy."""
+        return {
+            "name": cls.name,
+            "summary": cls.summary,
+            "uses": list(cls.uses),
+            "options": cls.Options.model_json_schema(),
+        }
+
+
+#: The key of `GAState.data` under which a run with objectives keeps its front so far: the
+#: distinct maximised points no evaluated individual dominates (strategies keep other keys).
+FRONT_KEY = "front"
+
+
+def _front(data: dict[str, Any] | None, values: np.ndarray) -> np.ndarray:
+    """The distinct non-dominated points of the front so far (in `data`) and `values` (failed
+    rows left out), sorted (np.unique's order): the same whatever order they were told in."""
+    known = np.asarray((data or {}).get(FRONT_KEY, []), dtype=np.float64)
+    finite = values[~np.isnan(values).any(axis=1)]
+    points = np.unique(np.concatenate([known.reshape(-1, values.shape[1]), finite]), axis=0)
+    return points[pareto.nondominated_mask(points)]
+
+
+def _best(
+    best: tuple[Any, float, int] | None,
+    individuals: list[Individual],
+    values: np.ndarray,
+    generation: int,
+) -> tuple[Any, float, int] | None:
+    """The best (genome, fitness, generation) so far, after `individuals` scored `values`;
+    the earlier one keeps a tie."""
+    finite = np.isfinite(values)
+    if finite.any():
+        index = int(np.nanargmax(np.where(finite, values, -np.inf)))
+        if best is None or values[index] > best[1]:
+            return (individuals[index].genome, float(values[index]), generation)
+    return best

@@ -1,0 +1,200 @@
+"""The generation step of a streaming strategy (`steady-state`): births go out as worker slots
+free and are told in birth order, so no core waits at a generation barrier.
+
+`Stepper.step` runs it for a strategy with `streaming`; a step still ends with one curve row
+(every `population` births), but the births in flight at its end stay in flight (`Flights`,
+which outlives the step) and the next step takes their results. Births whose genome an earlier
+birth had are not simulated again. Robots waiting to go out are sent together, up to the
+batch size, whenever a slot frees: small robots share a kernel call and a round trip.
+"""
+
+from __future__ import annotations
+
+import queue
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from softevo.core.evaluator import CHECK_SECONDS, BatchResult, Evaluator, hand_over, names_digest
+
+if TYPE_CHECKING:
+    from softevo.core.search.generation import Hooks, Step, Stepper
+    from softevo.core.search.state import GAState
+    from softevo.core.search.steady_state import Birth, Nursery
+
+#: What a batch thread hands back: the births it held, its result or what it raised.
+Landing = tuple[list["Birth"], BatchResult | None, BaseException | None]
+
+
+@dataclass
+class Flights:
+    """The batches of one run in flight, across steps: handed to the evaluator by the shared
+    batch threads, their landings queued for whichever step is running."""
+
+    evaluator: Evaluator
+    batch_size: int
+    in_flight: int
+    alarm: threading.Event  # set when a batch lands (the hooks' alarm, which a stop rings too)
+    out: set[str] = field(default_factory=set)  # genome hashes sent and not landed
+    batches: int = 0  # batches sent and not landed
+    landings: queue.SimpleQueue[Landing] = field(default_factory=queue.SimpleQueue)
+
+    def free(self, waiting: int) -> bool:
+        """Whether a batch of the `waiting` robots may go out now: while a worker is idle, any
+        batch; a second one per worker (there when the first lands) only a full one, so robots
+        wait to share a call rather than each pay one; never more than `in_flight`."""
+        workers = self.evaluator.capacity()
+        if self.batches >= min(self.in_flight, 2 * workers):
+            return False
+        return self.batches < workers or waiting >= self.batch_size
+
+    def send(self, births: list[Birth], files: list[dict[str, Any]], key: str) -> None:
+        names = [birth.individual.genome.hash for birth in births]
+        self.out.update(names)
+        self.batches += 1
+        hand_over(self._evaluate, births, files, f"{key}-b{births[0].number}-{names_digest(names)}")
+
+    def _evaluate(self, births: list[Birth], files: list[dict[str, Any]], key: str) -> None:
+        try:
+            self.landings.put((births, self.evaluator.evaluate_batch(files, key), None))
+        except BaseException as error:  # the step raises it
+            self.landings.put((births, None, error))
+        self.alarm.set()
+
+    def take(self, wait: float) -> list[Landing]:
+        """What landed, waiting up to `wait` s (or until the alarm rings) for the first."""
+        if self.landings.empty():
+            self.alarm.wait(wait)
+        self.alarm.clear()
+        landed = []
+        while not self.landings.empty():
+            births, result, error = self.landings.get_nowait()
+            self.batches -= 1
+            self.out.difference_update(birth.individual.genome.hash for birth in births)
+            landed.append((births, result, error))
+        return landed
+
+
+@dataclass
+class _Row:
+    """The step's bookkeeping: the births waiting to go out, the alarm that wakes it."""
+
+    stepper: Stepper
+    nursery: Nursery
+    cache: dict[str, float]
+    measures: dict[str, dict[str, float]]
+    hooks: Hooks
+    key: str
+    waiting: deque[Birth] = field(default_factory=deque)
+
+    def keep(self, births: list[Birth]) -> None:
+        """New births: kept by the hooks (which may know their fitness, after a takeover), and
+        queued to go out unless an earlier birth has their genome."""
+        population = self.stepper.algorithm.config.population
+        total = population * self.stepper.algorithm.config.generations
+        births = [birth for birth in births if birth.number < total]  # past the end: never sent
+        for generation, members in _by_row(births, population).items():
+            individuals = {index: births[p].individual for index, p in members.items()}
+            known, records = self.hooks.births(generation, individuals)
+            for index, value in known.items():
+                genome_hash = individuals[index].genome.hash
+                self.cache.setdefault(genome_hash, value)
+                self.measures.setdefault(genome_hash, records.get(index, {}))
+        self.waiting.extend(birth for birth in births if not birth.saved)
+
+    def send(self, flights: Flights) -> None:
+        """Fill free slots with the waiting births (up to a batch each)."""
+        while self.waiting and flights.free(len(self.waiting)):
+            births: list[Birth] = []
+            while self.waiting and len(births) < flights.batch_size:
+                birth = self.waiting.popleft()
+                genome_hash = birth.individual.genome.hash
+                if genome_hash not in self.cache and genome_hash not in flights.out:
+                    births.append(birth)
+            if births:
+                files = [self.stepper.robot_file(birth.individual) for birth in births]
+                flights.send(births, files, self.key)
+
+    def landed(self, births: list[Birth], result: BatchResult) -> None:
+        """A batch's results: cached by genome, and handed to the hooks by row."""
+        population = self.stepper.algorithm.config.population
+        records = result.records()
+        for birth, value, record in zip(births, result.fitness.tolist(), records, strict=True):
+            self.cache[birth.individual.genome.hash] = value
+            self.measures[birth.individual.genome.hash] = record
+        for generation, members in _by_row(births, population).items():
+            positions = list(members.values())
+            part = BatchResult(
+                result.fitness[positions], result.worker,
+                result.seconds * len(positions) / len(births), [records[p] for p in positions],
+            )  # fmt: skip
+            self.hooks.batch(generation, list(members), part)
+
+
+def stream_step(
+    stepper: Stepper,
+    state: GAState,
+    cache: dict[str, float],
+    evaluator: Evaluator,
+    hooks: Hooks,
+    key: str,
+    measures: dict[str, dict[str, float]],
+) -> Step:
+    """Tell `population` births of a streaming strategy, in birth order (see the module)."""
+    from softevo.core.search.generation import Step
+
+    started = time.perf_counter()
+    nursery = stepper.algorithm.nursery(state, cache)  # type: ignore[attr-defined]
+    flights = stepper.flights(evaluator, hooks.alarm)
+    row = _Row(stepper, nursery, cache, measures, hooks, key)
+    row.keep(list(nursery.window))
+    try:
+        while not nursery.row_done:
+            _tell_known(row)
+            if nursery.row_done:
+                break
+            row.send(flights)
+            due = hooks.check()
+            wait = CHECK_SECONDS if due is None else min(CHECK_SECONDS, due - time.monotonic())
+            for births, result, error in flights.take(max(0.0, wait)):
+                if error is not None:
+                    raise error
+                assert result is not None
+                row.landed(births, result)
+            if due is not None and time.monotonic() >= due:
+                hooks.flush()
+    except BaseException:
+        for births, result, _error in flights.take(0.0):  # what landed is kept
+            if result is not None:
+                row.landed(births, result)
+        raise
+    following, stats = nursery.finish()
+    individuals = [item[0] for item in nursery.row]
+    fitness = np.array([item[1] for item in nursery.row], dtype=np.float64)
+    records = [item[2] for item in nursery.row]
+    evaluated = frozenset(i for i, item in enumerate(nursery.row) if not item[3])
+    return Step(
+        individuals, fitness, records, evaluated, stats, following, time.perf_counter() - started
+    )
+
+
+def _by_row(births: list[Birth], population: int) -> dict[int, dict[int, int]]:
+    """Births by the curve row (generation) they belong to: index in it -> position in `births`."""
+    rows: dict[int, dict[int, int]] = {}
+    for position, birth in enumerate(births):
+        rows.setdefault(birth.number // population, {})[birth.number % population] = position
+    return rows
+
+
+def _tell_known(row: _Row) -> None:
+    """Tell every birth, oldest first, whose fitness is known; each breeds the next."""
+    nursery, cache = row.nursery, row.cache
+    while not nursery.row_done and nursery.window:
+        genome_hash = nursery.window[0].individual.genome.hash
+        if genome_hash not in cache:
+            return
+        row.keep([nursery.tell(cache[genome_hash], row.measures.get(genome_hash, {}), cache)])

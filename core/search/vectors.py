@@ -1,0 +1,124 @@
+"""Several objectives: the run setting `objectives` and the maximised vectors Pareto code reads.
+
+`"objectives": ["speed", "-cost_of_transport"]` names measures of the simulation's record
+(`softevo.core.objectives.MEASURES`); a leading `-` minimises. The object form
+`{"measure": "cost_of_transport", "goal": "min", "reference": 50000}` says the same and may set
+the hypervolume reference point (in the measure's own units). A config stores each objective in
+the object form with its reference filled in, so the reference a run's hypervolumes were
+measured against is kept with the run. Every vector is maximised (`softevo.core.search.pareto`):
+a minimised measure enters negated, and so does its reference.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
+
+from softevo.core.objectives import ENERGY_MEASURES, MEASURES
+
+#: Most objectives of a run (the exact hypervolume grows as N^(M-1)).
+MAX_OBJECTIVES = 4
+
+
+class ObjectiveSpec(BaseModel):
+    """One objective: a measure of the record, whether to maximise or minimise it, and the
+    hypervolume reference point's value for it."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
+
+    measure: str = Field(description="a measure of the simulation's record (docs/physics.md)")
+    goal: Literal["max", "min"] = "max"
+    reference: float = Field(
+        description="hypervolume reference, in the measure's units: worse than any robot counted"
+    )
+
+    @property
+    def sign(self) -> float:
+        return 1.0 if self.goal == "max" else -1.0
+
+    @property
+    def label(self) -> str:
+        """`-cost_of_transport`-style name (the short form)."""
+        return self.measure if self.goal == "max" else f"-{self.measure}"
+
+
+def parse_objectives(value: Any) -> tuple[ObjectiveSpec, ...]:
+    """The `objectives` setting from names or objects; ValueError in one line naming the item."""
+    if isinstance(value, str) or not isinstance(value, list | tuple):
+        raise ValueError(f"a list of measure names or objects, got {value!r}")
+    if len(value) > MAX_OBJECTIVES:
+        raise ValueError(f"at most {MAX_OBJECTIVES} objectives, got {len(value)}")
+    specs = tuple(_spec(item, position) for position, item in enumerate(value))
+    measures = [spec.measure for spec in specs]
+    if len(set(measures)) != len(measures):
+        raise ValueError(f"each measure at most once, got {measures}")
+    return specs
+
+
+def _spec(item: Any, position: int) -> ObjectiveSpec:
+    where = f"item {position}"
+    if isinstance(item, ObjectiveSpec):
+        return item
+    if isinstance(item, str):
+        measure, goal = (item[1:], "min") if item.startswith("-") else (item, "max")
+        item = {"measure": measure, "goal": goal}
+    if not isinstance(item, dict):
+        raise ValueError(f"{where}: a measure name or an object, got {item!r}")
+    unknown = sorted(set(item) - {"measure", "goal", "reference"})
+    if unknown:
+        raise ValueError(f"{where}: unknown key {unknown[0]!r} (measure, goal, reference)")
+    measure = item.get("measure")
+    if measure not in MEASURES:
+        raise ValueError(f"{where}: unknown measure {measure!r} (measures: {', '.join(MEASURES)})")
+    goal = item.get("goal") or "max"
+    if goal not in ("max", "min"):
+        raise ValueError(f"{where}: goal must be 'max' or 'min', got {goal!r}")
+    reference = item.get("reference")
+    if reference is None:  # absent or null: the measure's default
+        reference = MEASURES[measure][2]
+    if reference is None:
+        raise ValueError(f"{where}: {measure} has no default reference point, give `reference`")
+    if isinstance(reference, bool) or not isinstance(reference, int | float):
+        raise ValueError(f"{where}: reference must be a number, got {reference!r}")
+    if not math.isfinite(reference):
+        raise ValueError(f"{where}: reference must be finite, got {reference!r}")
+    return ObjectiveSpec(measure=measure, goal=goal, reference=float(reference))
+
+
+def needs_energy(specs: Sequence[ObjectiveSpec]) -> bool:
+    """Whether these objectives read a measure of the actuators' work."""
+    return any(spec.measure in ENERGY_MEASURES for spec in specs)
+
+
+def reference_point(specs: Sequence[ObjectiveSpec]) -> np.ndarray:
+    """The hypervolume reference point, maximised ([M])."""
+    return np.array([spec.sign * spec.reference for spec in specs], dtype=np.float64)
+
+
+def objective_values(
+    specs: Sequence[ObjectiveSpec],
+    records: Sequence[Mapping[str, float | None]],
+    fitness: np.ndarray,
+) -> np.ndarray:
+    """[N, M] maximised objective values of N individuals: each spec's measure from the record,
+    negated where minimised. A row is all NaN (failed) where the fitness is NaN or any of its
+    measures is missing or not finite; with no specs, the fitness alone ([N, 1])."""
+    values = np.asarray(fitness, dtype=np.float64)
+    if not specs:
+        return values[:, None].copy()
+    rows = np.full((len(values), len(specs)), np.nan)
+    for i, (record, value) in enumerate(zip(records, values, strict=True)):
+        if not math.isfinite(value):
+            continue
+        row = [_number(record.get(spec.measure)) * spec.sign for spec in specs]
+        if all(math.isfinite(x) for x in row):
+            rows[i] = row
+    return rows
+
+
+def _number(value: Any) -> float:
+    return float(value) if isinstance(value, int | float) else math.nan

@@ -1,0 +1,53 @@
+"""The GA state's fast JSON text (what the service stores every generation) parses to exactly
+its `to_json`, for every algorithm and encoding, with failed robots and an archive."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from softevo.core.config import resolve
+from softevo.core.search.algorithm import make_strategy
+from softevo.core.search.state import GAState
+
+CASES = [
+    {"preset": "paper-voxel", "shape": [3, 3, 3]},
+    {"preset": "paper-cube"},
+    {"preset": "quick", "encoding": "voxel-phase"},
+    {"preset": "quick", "encoding": "spring"},
+    {"preset": "quick", "algorithm": "hillclimb"},
+    {
+        "preset": "quick",
+        "algorithm": "map-elites",
+        "descriptors": ["voxels", "soft"],
+        "bins": [3, 4],
+    },
+]
+
+
+@pytest.mark.parametrize("request_", CASES, ids=lambda case: "-".join(map(str, case.values())))
+def test_the_state_text_parses_to_its_json(request_: dict) -> None:
+    config = resolve({**request_, "seed": 5})
+    algorithm = make_strategy(config.ga_config(), config.make_encoding())
+    state = algorithm.start(5)
+    rng = np.random.default_rng(0)
+    checked = 0
+    for generation in range(4):
+        for history in (True, False):
+            text = state.to_text(history)
+            assert json.loads(text) == json.loads(json.dumps(state.to_json(history)))
+            assert GAState.from_json(json.loads(text)).to_json(history) == state.to_json(history)
+            checked += 1
+        individuals = algorithm.ask(state)
+        fitness = rng.random(len(individuals))
+        fitness[generation % len(fitness)] = np.nan  # a failed robot: null in both
+        state, _ = algorithm.tell(
+            state, individuals, fitness, evaluations=len(individuals), saved=0
+        )
+        if generation % 2:
+            state.current = algorithm.ask(state)  # as the coordinator keeps the next generation
+    assert checked == 8
+    if config.algorithm == "map-elites":
+        assert state.archive is not None and state.archive.elites
