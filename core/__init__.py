@@ -1,5 +1,7 @@
 """softevo's core (installed as `softevo.core`), in rooms that say what they hold, each
-importing only the rooms above it:
+importing only the rooms above it (an import-linter `layers` contract in pyproject.toml; the
+cppn encoding's mutate and mate hooks, which call its NEAT operators in search, are the one
+exception it names):
 
     robots/    the voxel lattice, bodies, robot files, terrain, tasks and the genome encodings
     physics/   the numba mass-spring engine, and robot files simulated into records of measures

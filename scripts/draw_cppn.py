@@ -12,8 +12,8 @@ import numpy as np
 from softevo.core.outputs import figures
 from softevo.core.outputs.picture import thumbnail_png
 from softevo.core.robots.cppn import CppnEncoding, Network
-from softevo.core.robots.cppn_variation import mutate_network
 from softevo.core.robots.settings import SimSettings
+from softevo.core.search.cppn_variation import mutate_network
 
 SHAPE = (8, 8, 8)
 

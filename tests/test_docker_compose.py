@@ -132,7 +132,9 @@ def test_dockerfile_runs_as_non_root_and_copies_every_package() -> None:
     # The numba cache volume is mounted here: it must exist, owned by the user, in the image.
     assert "/home/softevo/.cache/numba" in dockerfile
     # ... and hold the compiled kernels: compiled at build time, as that user, after the install
-    compile_step = r"^RUN python -P -c .*softevo\.core\.physics\.evaluation import warm_up; warm_up\(\)"
+    compile_step = (
+        r"^RUN python -P -c .*softevo\.core\.physics\.evaluation import warm_up; warm_up\(\)"
+    )
     warm = re.search(compile_step, dockerfile, re.M)
     user = dockerfile.rindex("\nUSER ")
     assert warm and warm.start() > user > on_lock.start(), "kernels not compiled into the image"

@@ -227,7 +227,7 @@ class CppnEncoding(Encoding):
     def random(self, rng: np.random.Generator) -> Genome:
         """Every input joined to every output (uniform weights, random activations), then a
         few NEAT mutations, so the first population already differs in structure."""
-        from softevo.core.robots.cppn_variation import mutate_network
+        from softevo.core.search.cppn_variation import mutate_network
 
         nodes = tuple((o, int(rng.integers(len(ACTIVATIONS)))) for o in OUTPUT_IDS)
         pairs = sorted((innovation(i, o), i, o) for i in range(N_IN) for o in OUTPUT_IDS)
@@ -273,16 +273,16 @@ class CppnEncoding(Encoding):
         indices: tuple[int, int],
         rng: np.random.Generator,
     ) -> list[Individual]:
-        """NEAT crossover and mutation (`softevo.core.robots.cppn_variation.mate`)."""
-        from softevo.core.robots.cppn_variation import mate
+        """NEAT crossover and mutation (`softevo.core.search.cppn_variation.mate`)."""
+        from softevo.core.search.cppn_variation import mate
 
         return mate(config, self, pair, indices, rng)
 
     def mutate(
         self, config: GAConfig, parent: Individual, index: int, rng: np.random.Generator
     ) -> Individual:
-        """NEAT mutations of one parent (`softevo.core.robots.cppn_variation.mutant`)."""
-        from softevo.core.robots.cppn_variation import mutant
+        """NEAT mutations of one parent (`softevo.core.search.cppn_variation.mutant`)."""
+        from softevo.core.search.cppn_variation import mutant
 
         return mutant(config, self, parent, index, rng)
 

@@ -18,12 +18,12 @@ from softevo.core.robots.cppn import (
     innovation,
     split_node,
 )
-from softevo.core.robots.cppn_variation import _add_connection, _add_node, crossover, mate, mutant
 from softevo.core.robots.encodings import EncodingError, make_encoding
 from softevo.core.robots.genome import Genome
 from softevo.core.robots.robot_file import parse_robot, robot_to_json
 from softevo.core.robots.settings import SimSettings
 from softevo.core.search.algorithm import GAConfig
+from softevo.core.search.cppn_variation import _add_connection, _add_node, crossover, mate, mutant
 from softevo.core.search.state import Individual
 
 SIM = SimSettings(duration=0.3, settle_time=0.1)
