@@ -14,7 +14,8 @@ wall (1.0: nothing but simulation). Paths:
 * `service-rq`: the same with a private redis-server and two `softevo worker` processes.
 
 Workloads: `paper-voxel` (4x4x4, seed 1, 25 x G generations, 100 by default), `steady-voxel`
-and `steady-cube` (`paper-voxel` and `paper-cube` as `steady-state` runs), `sweep` (the
+and `steady-cube` (`paper-voxel` and `paper-cube` as `steady-state` runs; `steady-voxel:K`
+with a window of K populations), `sweep` (the
 paper's nine boxes x seeds 1-3 as one `POST /sweeps`, G generations each; `run` path: the 27 runs
 one after another), `paper-cube` (the 28-spring cube, 30 x G, 1000 by default), `seeds` (one
 box, 4x4x4, seeds 1-6 as one sweep, G generations, 40 by default: runs whose robots can share
@@ -72,10 +73,14 @@ def workload(name: str, generations: int | None) -> list[dict[str, Any]]:
         return [{"preset": "paper-voxel", "seed": 1, "generations": generations or 100}]
     if name == "paper-cube":
         return [{"preset": "paper-cube", "seed": 1, "generations": generations or 1000}]
-    if name in ("steady-voxel", "steady-cube"):  # the same settings, steady-state (issue 37)
+    if name.partition(":")[0] in ("steady-voxel", "steady-cube"):  # steady-state (issue 37)
+        name, _, windows = name.partition(":")  # `steady-voxel:2`: a window of 2 populations
         preset = "paper-voxel" if name == "steady-voxel" else "paper-cube"
-        request = workload(preset, generations)[0]
-        return [{**request, "algorithm": "steady-state"}]
+        request = {**workload(preset, generations)[0], "algorithm": "steady-state"}
+        if windows:
+            population = resolve({"preset": preset}).population
+            request["options"] = {"window": int(windows) * population}
+        return [request]
     if name == "seeds":
         return [
             {
@@ -313,7 +318,7 @@ def main() -> None:
     print(f"# {cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
           f"SOFTEVO_MAX_RUNNING {args.max_running or 'default'}")  # fmt: skip
     print(
-        "workload     path         simulations    wall (s)   bound (s)   bound/wall"
+        "workload       path         simulations    wall (s)   bound (s)   bound/wall"
         "   generation bound (s)   bound/generation bound   generation bound/wall"
     )
     for name in args.workload.split(","):
@@ -335,7 +340,7 @@ def main() -> None:
                 if args.no_bound or len(requests) > 1 or name.startswith("steady")
                 else generation_bound(generations)
             )
-            print(f"{name:12} {path:12} {len(files):11d} {wall:11.1f} {physics:11.1f} "
+            print(f"{name:14} {path:12} {len(files):11d} {wall:11.1f} {physics:11.1f} "
                   f"{physics / wall:12.2f} {barrier:22.1f} {physics / barrier:24.2f} "
                   f"{barrier / wall:23.2f}", flush=True)  # fmt: skip
 

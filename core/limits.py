@@ -16,6 +16,13 @@ SERVICE_MAX_VOXELS = 1000
 #: Robots per evaluator call in the service by default (SOFTEVO_BATCH_SIZE); the local pool cuts
 #: no chunk smaller than this.
 BATCH_SIZE = 4
+#: Lattice points of the largest box the kernels count as small (the paper's cube has 8, a 2x2x2
+#: box 27): a call of few such robots costs more than their simulation, so a streaming run sends
+#: them `SMALL_BATCH` at a time (a full AVX-512 vector of lanes: a paper-cube robot took 3.9 ms in
+#: a call of 8 against 5.9 ms in one of 4, BENCHMARKS.md "Small robots"), and the physics runs
+#: fewer than 4 of them robot by robot.
+SMALL_POINTS = 27
+SMALL_BATCH = 8
 #: Batches of one run in flight at once by default (SOFTEVO_QUEUED_BATCHES in the service).
 IN_FLIGHT = 64
 #: The service saves a batch's fitness as it lands unless the run was written less than this

@@ -214,9 +214,9 @@ def _check_births(config: RunConfig, encoding: Encoding, state: GAState) -> None
     _expect(isinstance(births, list) and len(births) == len(state.previous or [])
             and all(_is_int(n) and 0 <= n < told for n in births), "state.json: data.steady.births",
             f"a birth number below {told} per member", births)  # fmt: skip
-    window = kept.get("window")
-    _expect(isinstance(window, list) and len(window) <= config.population,
-            "state.json: data.steady.window", "a list of births", window)  # fmt: skip
+    window, size = kept.get("window"), config.options.get("window") or config.population
+    _expect(isinstance(window, list) and len(window) == size, "state.json: data.steady.window",
+            f"a list of {size} births (the window)", window)  # fmt: skip
     for i, item in enumerate(window):
         where = f"state.json: data.steady.window[{i}]"
         _expect(isinstance(item, dict) and item.get("n") == told + i

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from softevo.core.limits import SMALL_POINTS
 from softevo.core.nulls import to_null, to_nulls
 from softevo.core.objectives import OBJECTIVE_MEASURES, STANDARD_GRAVITY
 from softevo.core.physics import kernels
@@ -27,13 +28,12 @@ from softevo.core.robots.terrain import kernel_params
 #: 4x4x4 robots keeps its arrays in a 1 MB L2 cache: 4 to 8 measured fastest, 32 about 30 %
 #: slower (bench/physics.py, BENCHMARKS.md).
 DEFAULT_LANES = 8
-#: A chunk of fewer robots than this, each of at most `SMALL_POINTS` lattice points (the paper's
-#: cube has 8, a 2x2x2 box 27), runs robot by robot in `simulate_one` when `simulate_batch` is
-#: asked to (`small_alone`): with so few robots the batched kernel's SIMD lanes stay mostly empty,
-#: and one robot at a time cost 0.4-0.8 of it per robot (BENCHMARKS.md, "Small robots"). Same
-#: bits either way.
+#: A chunk of fewer robots than this, each of at most `SMALL_POINTS` lattice points
+#: (`softevo.core.limits`), runs robot by robot in `simulate_one` when `simulate_batch` is asked
+#: to (`small_alone`): with so few robots the batched kernel's SIMD lanes stay mostly empty, and
+#: one robot at a time cost 0.4-0.8 of it per robot (BENCHMARKS.md, "Small robots"). Same bits
+#: either way.
 SMALL_WIDTH = 4
-SMALL_POINTS = 27
 
 
 @dataclass(frozen=True)

@@ -13,6 +13,7 @@ before a crash) is counted as evaluated but not simulated again. A streaming str
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from dataclasses import dataclass
@@ -22,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from softevo.core.evaluator import BatchResult, Evaluator, evaluate_in_batches
-from softevo.core.limits import BATCH_SIZE, IN_FLIGHT
+from softevo.core.limits import BATCH_SIZE, IN_FLIGHT, SMALL_BATCH, SMALL_POINTS
 from softevo.core.robots.encodings import Encoding
 from softevo.core.robots.robot_file import robot_to_json
 from softevo.core.robots.settings import SimSettings
@@ -122,12 +123,21 @@ class Stepper:
         a run without them sends the files it always did)."""
         return needs_energy(self.algorithm.config.objectives)
 
+    @cached_property
+    def stream_batch(self) -> int:
+        """Robots per call of a streaming strategy: `batch_size`, or at least `SMALL_BATCH` for
+        robots of a box of at most `SMALL_POINTS` lattice points, whose calls would otherwise
+        cost more than their simulations (which are the same bits in any batch)."""
+        shape = getattr(self.encoding, "shape", None)
+        points = math.prod(side + 1 for side in shape) if shape else SMALL_POINTS + 1
+        return max(self.batch_size, SMALL_BATCH) if points <= SMALL_POINTS else self.batch_size
+
     def flights(self, evaluator: Evaluator, alarm: threading.Event | None) -> Flights:
         """The run's batches in flight, kept across the steps of a streaming strategy."""
         flights = self.__dict__.get("_flights")
         if flights is None or flights.evaluator is not evaluator:
             alarm = alarm or threading.Event()
-            flights = Flights(evaluator, self.batch_size, self.in_flight, alarm)
+            flights = Flights(evaluator, self.stream_batch, self.in_flight, alarm)
             self.__dict__["_flights"] = flights
         return flights
 

@@ -120,10 +120,26 @@ def test_a_steady_state_map_elites_draws_parents_from_the_archive() -> None:
     assert other.curve() != serial.curve()  # the parents' source is honoured
 
 
+def test_a_window_past_the_population_starts_with_that_many_random_births() -> None:
+    """W > P: births 0 .. W-1 are random (nothing is told when they are bred), later ones bred;
+    the run is still the same whatever order results land in."""
+    request = {**REQUEST, "options": {"window": 20}}
+    serial = _run(SerialEvaluator(), request)
+    assert serial.curve() == _run(Shuffled(4, 7), request).curve()
+    evolution, operators = Evolution.start(resolve(request)), []
+    for _ in range(3):  # rows of 8 births: 0-7, 8-15, 16-23
+        step = evolution.stepper.step(evolution.state, evolution.cache, SerialEvaluator())
+        evolution.state = step.state
+        operators += [individual.operator for individual in step.individuals]  # birth order
+    assert set(operators[:20]) == {"random"}  # births 0-19: below W, random
+    assert "random" not in operators[20:] and set(operators[20:]) - {"immigrant"}  # bred
+    narrow = _run(SerialEvaluator(), {**REQUEST, "options": {"window": 8}})
+    assert narrow.curve() != serial.curve()
+
+
 @pytest.mark.parametrize(
     ("options", "extra", "message"),
     [
-        ({"window": 9}, {}, "options.window: 9 is more than the population (8)"),
         ({"window": 0}, {}, "options.window"),
         ({"parents": "archive"}, {}, 'options.parents: "archive" needs descriptors'),
         ({"parents": "elsewhere"}, {}, "options.parents"),
