@@ -44,6 +44,14 @@ CASES: dict[str, dict[str, Any]] = {
                        "descriptors": ["voxels", "actuated"], "bins": [8, 8], **SHORT},
     "spring": {"preset": "quick", "encoding": "spring", "shape": [2, 2, 2], **SHORT},
     "efficiency": {"preset": "quick", "objective": "efficiency", **SHORT},
+    # the strategies of issues 36-38 (only in trees that have them)
+    "nsga2": {"preset": "quick", "algorithm": "nsga2", "objectives": ["speed", "-energy"],
+              **SHORT},
+    "afpo": {"preset": "quick", "algorithm": "afpo", **SHORT},
+    "steady-state": {"preset": "quick", "algorithm": "steady-state", **SHORT},
+    "steady-archive": {"preset": "quick", "algorithm": "steady-state", "descriptors": ["voxels",
+                       "actuated"], "bins": [4, 4], "options": {"parents": "archive"}, **SHORT},
+    "cppn": {"preset": "quick", "encoding": "cppn", "shape": [4, 4, 4], **SHORT},
 }  # fmt: skip
 
 ONE = """
