@@ -55,7 +55,17 @@ CASES: dict[str, dict[str, Any]] = {
 }  # fmt: skip
 
 ONE = """
-import hashlib, json, sys
+import hashlib, importlib.metadata as metadata, json, sys, tomllib
+if len(sys.argv) > 2:  # a staged tree: its own strategies, not the installed checkout's
+    points = tomllib.load(open(sys.argv[2], "rb"))["project"]["entry-points"]
+    mine = metadata.EntryPoints(
+        metadata.EntryPoint(name, value, group)
+        for group, names in points.items() for name, value in names.items()
+    )
+    installed = metadata.entry_points
+    metadata.entry_points = lambda **kw: (
+        mine.select(**kw) if kw.get("group") in points else installed(**kw)
+    )
 from softevo import library
 result = library.evolve(json.loads(sys.argv[1]), workers=1)
 digest = lambda value: hashlib.sha256(json.dumps(value, sort_keys=True).encode()).hexdigest()[:16]
@@ -68,17 +78,19 @@ def stage(tree: Path) -> Path:
     """A folder where `import softevo` finds `tree`'s code as it would be installed."""
     staged = Path(tempfile.mkdtemp(prefix="softevo-tree-"))
     shutil.copytree(tree / "softevo", staged / "softevo")
+    shutil.copy(tree / "pyproject.toml", staged / "pyproject.toml")
     for folder in ("core", "api", "worker", "migrations"):
         shutil.copytree(tree / folder, staged / "softevo" / folder)
     return staged
 
 
 def run(config: dict[str, Any], path: Path | None) -> dict[str, Any]:
-    env = dict(os.environ)
+    env, staged = dict(os.environ), []
     if path is not None:
         env["PYTHONPATH"] = str(path)
+        staged = [str(path / "pyproject.toml")]
     done = subprocess.run(
-        [sys.executable, "-c", ONE, json.dumps(config)],
+        [sys.executable, "-c", ONE, json.dumps(config), *staged],
         capture_output=True, text=True, env=env, cwd=tempfile.gettempdir(), check=False,
     )  # fmt: skip
     if done.returncode != 0:

@@ -152,3 +152,28 @@ def test_bad_options_are_refused_by_name(
         (ConfigError, ValueError), match=message.replace("(", r"\(").replace(")", r"\)")
     ):
         resolve({**REQUEST, "options": options, **extra})
+
+
+class Sizes(Shuffled):
+    """Shuffled, noting how many robots each call held."""
+
+    def __init__(self, capacity: int) -> None:
+        super().__init__(capacity, 0)
+        self.sizes: list[int] = []
+
+    def evaluate_batch(self, robot_files: Sequence[dict[str, Any]], key: str | None = None):
+        self.sizes.append(len(robot_files))
+        return super().evaluate_batch(robot_files, key)
+
+
+def test_robots_of_small_boxes_share_calls_up_to_the_lanes() -> None:
+    """A paper-cube robot (8 lattice points) goes out 8 to a call in a streaming run, a 3x3x3
+    voxel robot (64 points) `batch_size` (4) at most; the same run either way."""
+    cube = {"preset": "paper-cube", "seed": 2, "generations": 3, "algorithm": "steady-state",
+            "options": {"window": 60}, "sim": {"duration": 1.0, "settle_time": 0.5}}  # fmt: skip
+    sizes = Sizes(1)
+    assert _run(sizes, cube).curve() == _run(SerialEvaluator(), cube).curve()
+    assert max(sizes.sizes) == 8
+    voxels = Sizes(1)
+    _run(voxels, {**REQUEST, "options": {"window": 8}})
+    assert max(voxels.sizes) == 4
