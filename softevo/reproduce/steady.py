@@ -63,7 +63,7 @@ GA_AGAIN = "GA, again"  # round 2's GA, run beside the matched steady-state run
 #: The GA run timed beside each method's (the same box and seed, the run before it; for the GA,
 #: its second run, whose difference says how much the machine's load moves a wall time).
 BESIDE = {GA: GA_AGAIN, STEADY: GA_AGAIN, LONG: GA}
-#: A batch's key names the birth it starts with (`core.stream.Flights.send`).
+#: A batch's key names the birth it starts with (`core.search.stream.Flights.send`).
 _FIRST_BIRTH = re.compile(r"-b(\d+)-")
 
 
