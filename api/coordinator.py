@@ -2,10 +2,9 @@
 
 For each run it owns (see `store.leases`) it runs the one generation step of
 `softevo.core.search.generation` with persistence around it (`RunDriver`): the generation's
-individuals
-are kept before anything is evaluated, batches' fitness is saved as it lands (a batch that lands
-within `save_seconds` of the run's last write waits for the next one, so a generation of quick
-batches costs one transaction, not one per batch), and the generation (its remaining fitness,
+individuals are kept before anything is evaluated, batches' fitness is saved as it lands (a batch
+that lands within `save_seconds` of the run's last write waits for the next one, so a generation of
+quick batches costs one transaction, not one per batch), and the generation (its remaining fitness,
 statistics, the GA state, the run's counters, and the next generation's members, bred at once)
 is committed in one transaction. The GA state stored with the last committed generation is all a
 successor needs: generation g is bred from (seed, g) and generation g-1 alone, so a run taken over

@@ -47,6 +47,7 @@ from typing import Any
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # bench/staged.py (run with -P)
 POSTGRES = os.environ.get("SOFTEVO_TEST_POSTGRES", "postgresql://postgres@127.0.0.1:5432/test")
 
 
@@ -220,6 +221,10 @@ def measure_once(
 ) -> None:
     """One run in this process (of this checkout, or of `tree` when it is on the path); prints
     its CPU seconds, wall seconds and individuals as JSON."""
+    if tree is not None:  # its own strategies, not the installed checkout's
+        from staged import own_strategies
+
+        own_strategies(Path(tree))
     found = modules(tree)
     with tempfile.TemporaryDirectory() as folder:  # warm up: a long-lived service pays imports
         drive(found, f"sqlite:///{Path(folder) / 'warm.db'}", 3, 0.0, algorithm)  # and first calls
@@ -238,11 +243,9 @@ def stage(tree: str) -> str:
     tree itself when it is of the old layout (top-level `core` and `api`)."""
     if (Path(tree) / "api" / "storage.py").exists():
         return tree
-    staged = Path(tempfile.mkdtemp(prefix="softevo-tree-"))
-    shutil.copytree(Path(tree) / "softevo", staged / "softevo")
-    for folder in ("core", "api", "worker", "migrations"):
-        shutil.copytree(Path(tree) / folder, staged / "softevo" / folder)
-    return str(staged)
+    from staged import stage as staged
+
+    return str(staged(Path(tree)))
 
 
 def run_once(

@@ -15,11 +15,10 @@ wall (1.0: nothing but simulation). Paths:
 
 Workloads: `paper-voxel` (4x4x4, seed 1, 25 x G generations, 100 by default), `steady-voxel`
 and `steady-cube` (`paper-voxel` and `paper-cube` as `steady-state` runs; `steady-voxel:K`
-with a window of K populations), `sweep` (the
-paper's nine boxes x seeds 1-3 as one `POST /sweeps`, G generations each; `run` path: the 27 runs
-one after another), `paper-cube` (the 28-spring cube, 30 x G, 1000 by default), `seeds` (one
-box, 4x4x4, seeds 1-6 as one sweep, G generations, 40 by default: runs whose robots can share
-kernel calls when several are driven at once). Every path warms
+with a window of K populations), `sweep` (the paper's nine boxes x seeds 1-3 as one `POST /sweeps`,
+G generations each; `run` path: the 27 runs one after another), `paper-cube` (the 28-spring cube, 30
+x G, 1000 by default), `seeds` (one box, 4x4x4, seeds 1-6 as one sweep, G generations, 40 by
+default: runs whose robots can share kernel calls when several are driven at once). Every path warms
 its kernels first (a small untimed run), and the bound is measured after the path, in the same
 invocation. For one run (not a sweep) it also prints the generation bound: the same robots
 cut per generation as the generation step cuts them, each batch timed alone, list-scheduled on

@@ -10,8 +10,7 @@ robots for the service, then drives them from this process through `worker.evalu
   worker itself, no fork;
 * `pool/simple` and `pool/fork`: RQ's `rq.worker_pool.WorkerPool` in one process that loads the
   kernels first (`softevo.core.physics.evaluation.warm_up`) and then forks its N workers
-  (`SimpleWorker`s or
-  forking `Worker`s), so they start warm;
+  (`SimpleWorker`s or forking `Worker`s), so they start warm;
 * `PoolEvaluator`: the in-process baseline, `softevo.core.physics.evaluation.PoolEvaluator(n)`
   with n batches in flight (the service's local path). Batches go to its process pool as the job
   function `worker.jobs.evaluate_batch`, which times itself like on an RQ worker.

@@ -3,9 +3,8 @@
 The generation step (`softevo.core.search.generation`) only sees `Evaluator`: robot files in (plain
 `softevo.robot/1` dicts), speeds out (m/s; NaN for a robot that failed, never 0). Backends: the
 in-process serial evaluator and local process pool (`softevo.core.physics.evaluation`), and RQ
-workers on
-Redis (`softevo.worker.evaluator`). A robot's fitness does not depend on which backend, process or
-batch simulated it, so every backend gives the same learning curve.
+workers on Redis (`softevo.worker.evaluator`). A robot's fitness does not depend on which backend,
+process or batch simulated it, so every backend gives the same learning curve.
 """
 
 from __future__ import annotations

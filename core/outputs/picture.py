@@ -3,8 +3,7 @@ drawn offscreen by matplotlib's Agg (no screen, no GPU) (README "Moving pictures
 
 Every filled voxel is a hexahedron whose 8 corners are its 8 lattice masses at that frame; only
 its outer faces are drawn (`softevo.core.outputs.export.surface_faces`, the exporters' own rule),
-with
-Lambert shading from a fixed light, coloured by material as the dashboard does (actuated voxels
+with Lambert shading from a fixed light, coloured by material as the dashboard does (actuated voxels
 of a co-designed robot by the hue of their phase). The camera is orthographic and follows the
 centre of mass; the ground or terrain is drawn as a checkerboard, so motion shows against it.
 """

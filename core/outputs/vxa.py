@@ -18,8 +18,7 @@ docs/export.md says where it is exact and where it is not:
   that evosoro's Voxelyze gives it from its CTE, TempPeriod = 2 pi / w and the per-voxel layers
   PhaseOffset, TempAmpDamp, FinalTempAmpDamp, GrowthTime and Final/InitialVoxelSize
   (softevo.core.outputs.vxa_layers), ramped in over softevo's settle time; GrowthAmplitude lets a
-  voxel
-  grow as well as shrink.
+  voxel grow as well as shrink.
 * the run: a GA section (the fitness file, with the centre of mass traced), a stop at softevo's
   duration, the drop height as empty layers under the robot, softevo's velocity damping as
   SlowDampingZ.
@@ -285,8 +284,7 @@ class VxaError(ValueError):
 
 def to_vxa(robot: Robot, grid: np.ndarray) -> bytes:
     """`robot` (its simulated voxels `grid`, see softevo.core.outputs.export.voxel_grid) as a VXA
-    that
-    evosoro's Voxelyze runs as it is, writing its fitness file (docs/export.md)."""
+    that evosoro's Voxelyze runs as it is, writing its fitness file (docs/export.md)."""
     if not isinstance(robot, VoxelRobot):
         raise VxaError(
             "vxa needs a robot of voxel materials (soft, hard, sine, neg_sine): this robot's "

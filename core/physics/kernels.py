@@ -23,13 +23,12 @@ is plain IEEE double (no reassociation, no fused multiply-add), the same on ever
 
 **The batched layout.** `simulate_many` numbers the lattice points of a box (x fastest, then y, then
 z, like `softevo.core.robots.lattice`) and stores each spring in a *slot* (q, p): the spring from
-point p
-to point p + offsets[q], where `offsets` are the distinct positive index offsets of a point's 26
-neighbours in the box, ascending. A slot that is no spring of robot r (two points that are not
-neighbours, across the edge of the box, or a spring robot r lacks) has k = 0 in lane r; a point
-robot r lacks has a zero step factor, so it never moves. Then one direction q is one flat loop over
-(P - offsets[q]) * B contiguous numbers with no index arrays, and the sums are two flat loops per
-direction and component. This is 1.5 to 4 times as fast as walking the springs one by one with a
+point p to point p + offsets[q], where `offsets` are the distinct positive index offsets of a
+point's 26 neighbours in the box, ascending. A slot that is no spring of robot r (two points that
+are not neighbours, across the edge of the box, or a spring robot r lacks) has k = 0 in lane r; a
+point robot r lacks has a zero step factor, so it never moves. Then one direction q is one flat loop
+over (P - offsets[q]) * B contiguous numbers with no index arrays, and the sums are two flat loops
+per direction and component. This is 1.5 to 4 times as fast as walking the springs one by one with a
 short loop over the robots inside (BENCHMARKS.md): that inner loop ran only a few vector iterations
 per spring, each behind runtime checks that its arrays do not overlap, and with 32 robots its
 working set outgrew the L2 cache. The price is wasted work on k = 0 slots (a solid 4x4x4 block has

@@ -1,2 +1,2 @@
-"""Robots: the voxel lattice, bodies, robot files, terrain and tasks, and the genome
-encodings that build bodies (direct, voxel-phase, cppn)."""
+"""Robots: the voxel lattice, bodies, robot files, simulation settings, terrain and tasks,
+and genomes with the encodings that build bodies from them (voxel, spring, voxel-phase, cppn)."""

@@ -3,8 +3,7 @@
 A genome is a list of discrete genes (small integers, each with its own alphabet size) and a list
 of real genes (each with bounds). What the genes mean is the encoding's business
 (`softevo.core.robots.encodings`); the operators in `softevo.core.search.operators` only see
-integers and
-floats.
+integers and floats.
 """
 
 from __future__ import annotations

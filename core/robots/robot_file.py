@@ -16,9 +16,8 @@ Files without them load as they always did.
 
 A robot whose springs carry their own [k, b, w, c] (the paper's phase 2 cube) lists them under
 "springs" in the canonical spring order of `softevo.core.robots.lattice`, instead of material
-labels.
-A robot of the `spring` encoding gives "spring_labels": one of soft, hard, sine, neg_sine for
-every spring of the full grid lattice (all voxels filled), with "actuation" genes. For both,
+labels. A robot of the `spring` encoding gives "spring_labels": one of soft, hard, sine, neg_sine
+for every spring of the full grid lattice (all voxels filled), with "actuation" genes. For both,
 "voxels", if given, only say which voxels are "filled" or "empty" (default: all filled).
 
 Anything else is refused with a one-line message that names the field: unknown keys, wrong

@@ -4,8 +4,7 @@ Each task is a terrain and the objective that fits it; everything else is the pa
 so a task's runs differ from `paper-voxel` only in where the robot is and what it is scored by.
 The robot starts on flat ground with its front face (the largest x of its masses at rest)
 0.15 m before the first riser or bar, whatever its box (`softevo.core.robots.terrain.start_shift`):
-a
-good paper-voxel crawler covers about half a metre in the 9 measured seconds, so it meets the
+a good paper-voxel crawler covers about half a metre in the 9 measured seconds, so it meets the
 feature after a few seconds (with the first riser 0.5 m away, no robot of the first suite ever
 reached it; with it at x = 4.15 m whatever the box, no 3x3x3 robot did: docs/tasks.md).
 """

@@ -1,6 +1,5 @@
 """The MAP-Elites archive: a grid over descriptors (`softevo.core.search.descriptors`), one elite
-per
-cell, the fittest robot whose descriptors fall in it.
+per cell, the fittest robot whose descriptors fall in it.
 
 A cell's elite is replaced only by a strictly fitter robot; on equal fitness the smaller genome
 hash wins, so the archive after a set of evaluations is the same whatever order they arrived in.

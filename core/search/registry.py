@@ -35,7 +35,8 @@ def strategies() -> dict[str, type[Strategy]]:
             loaded = point.load()
         except Exception as error:
             raise StrategyError(
-                f"algorithm {point.name!r}: cannot load {point.value} ({error})"
+                f"algorithm {point.name!r}: cannot load {point.value} ({error}; an install "
+                "older than its code? pip install --no-deps --no-build-isolation -e .)"
             ) from None
         if not (isinstance(loaded, type) and issubclass(loaded, Strategy)):
             raise StrategyError(f"algorithm {point.name!r}: {point.value} is not a Strategy")

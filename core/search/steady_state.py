@@ -40,6 +40,9 @@ if TYPE_CHECKING:
 
 #: The key of `GAState.data` holding the births in flight and the population's birth numbers.
 KEY = "steady"
+#: The widest window, in populations: the W births in flight are stored with every row (and its
+#: first W births are random), and 4 populations already fed two RQ workers (BENCHMARKS.md).
+MAX_WINDOW = 8
 #: Mixed into every birth's seed, apart from the generations' (`generation_rng`).
 _BIRTHS = 0x5EED
 
@@ -54,7 +57,8 @@ class SteadyStateOptions(BaseModel):
         ge=1,
         le=10_000,
         description="W, the births that may be in flight at once: birth n is bred once births "
-        "up to n-W are told; births below max(population, W) are random. Null: the population. "
+        "up to n-W are told; births below max(population, W) are random. Null: the population; "
+        "at most 8 populations. "
         "A birth that repeats a genome is not simulated but still holds its place, so where "
         "most children repeat a parent (paper-voxel: 3 in 4) a window of 2-4 populations keeps "
         "two cores busy; a smaller one selects on fresher results",
@@ -104,6 +108,12 @@ class SteadyState(Strategy):
 
     @classmethod
     def check(cls, config: GAConfig) -> None:
+        window = config.options.get("window")
+        if isinstance(window, int) and window > MAX_WINDOW * config.population:
+            raise ValueError(
+                f"options.window: {window} is more than {MAX_WINDOW} populations "
+                f"({MAX_WINDOW * config.population}); every birth in flight is kept in the state"
+            )
         if config.options.get("parents") == "archive" and not config.descriptors:
             raise ValueError('options.parents: "archive" needs descriptors and bins')
 
@@ -145,7 +155,7 @@ class SteadyState(Strategy):
         return Individual(self.encoding.random(birth_rng(seed, number)), "random")
 
     def bred(self, nursery: Nursery, number: int) -> Individual:
-        """Birth `number` (>= P), from the nursery's population and archive as they stand."""
+        """Birth `number` (>= W), from the nursery's population and archive as they stand."""
         config = self.config
         rng = birth_rng(nursery.state.seed, number)
         if number < config.population:

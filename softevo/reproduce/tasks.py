@@ -1,6 +1,5 @@
 """`softevo reproduce --tasks`: the task suite (core/robots/tasks.py) through the API, the GA
-against
-random search on the same budget.
+against random search on the same budget.
 
 One `POST /sweeps` over every task x seeds 1-3 (paper-voxel's GA, 4x4x4, 25 x 100); once a task's
 GA runs are done, random search on that task gets their mean number of simulations (25 new random

@@ -1,7 +1,6 @@
 """`?format=vxa|glb|stl` on a run's best robot and on any individual: through the real app, the
 bytes equal what softevo.core.outputs.export writes for the robot file the JSON answer gives, with
-the
-format's media type and a download name; a bad format or a robot the format cannot hold is a
+the format's media type and a download name; a bad format or a robot the format cannot hold is a
 422 that says why."""
 
 from __future__ import annotations

@@ -33,10 +33,12 @@ def _rows(db: Database, run_id: int) -> dict[str, int]:
     return dict(counts)  # type: ignore[arg-type]
 
 
-def test_the_service_gives_the_in_process_curve(db: Database) -> None:
-    run = store.create_run(db, resolve(REQUEST))
+@pytest.mark.parametrize("window", [6, 20])  # 20: births bred up to 2.5 rows ahead
+def test_the_service_gives_the_in_process_curve(db: Database, window: int) -> None:
+    request = {**REQUEST, "options": {"window": window}}
+    run = store.create_run(db, resolve(request))
     assert drive(db, run.id, SerialEvaluator(), batch_size=2) == "completed"
-    expected = undisturbed(REQUEST).curve()
+    expected = undisturbed(request).curve()
     assert store.curve(db, run.id) == expected
     rows = _rows(db, run.id)
     assert "pending" not in rows and sum(rows.values()) == 8 * 4  # every birth, none past the end

@@ -9,7 +9,10 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
+
+import pytest
 
 from tests.softevo.inprocess import softevo
 from tests.softevo.test_run_command import AS_A_SHELL_STARTS_IT
@@ -56,14 +59,29 @@ def test_ctrl_c_mid_run_then_resume_gives_the_uninterrupted_curve(tmp_path: Path
     assert _curve(stopped) == _curve(whole)
 
 
-def test_a_tampered_window_is_refused_in_one_line(tmp_path: Path) -> None:
+def _renumbered(window: list[dict]) -> None:
+    window[2]["n"] = 99
+
+
+@pytest.mark.parametrize(
+    ("tamper", "ending"),
+    [
+        (
+            _renumbered,
+            "data.steady.window[2]: expected birth 10 with saved true or false, got dict",
+        ),
+        (list.pop, "data.steady.window: expected a list of 5 births (the window), got list"),
+    ],
+)
+def test_a_tampered_window_is_refused_in_one_line(
+    tmp_path: Path, tamper: Callable[[list[dict]], object], ending: str
+) -> None:
     folder = tmp_path / "run"
     done = softevo(*RUN, "--workers", "1", "--generations", "1", "--out", str(folder))
     assert done.returncode == 0, done.stderr
     state = json.loads((folder / "state.json").read_text())
-    state["data"]["steady"]["window"][2]["n"] = 99
+    tamper(state["data"]["steady"]["window"])
     (folder / "state.json").write_text(json.dumps(state))
     refused = softevo("run", "--resume", str(folder), "--generations", "3")
     assert refused.returncode == 2
-    assert refused.stderr.strip().endswith("data.steady.window[2]: expected birth 10 with saved "
-                                           "true or false, got dict")  # fmt: skip
+    assert refused.stderr.strip().endswith(ending)

@@ -1,6 +1,5 @@
 """What a picture draws (core/outputs/picture.py): a co-designed robot's actuated voxels in the hue
-of
-their phase rather than their material's colour, and the terrain under the robot."""
+of their phase rather than their material's colour, and the terrain under the robot."""
 
 from __future__ import annotations
 

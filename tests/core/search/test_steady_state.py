@@ -83,15 +83,17 @@ def test_one_two_and_four_processes_give_the_same_run() -> None:
         assert pooled.state.to_json() == serial.state.to_json()
 
 
-def test_a_stop_and_resume_from_the_stored_state_goes_on_to_the_same_run() -> None:
-    whole = _run(SerialEvaluator())
-    first = Evolution.start(resolve(REQUEST))
+@pytest.mark.parametrize("window", [4, 12])  # 12: past the population (8)
+def test_a_stop_and_resume_from_the_stored_state_goes_on_to_the_same_run(window: int) -> None:
+    request = {**REQUEST, "options": {"window": window}}
+    whole = _run(SerialEvaluator(), request)
+    first = Evolution.start(resolve(request))
     evaluator = Shuffled(4, 7)
     for _ in range(2):
         first.step(evaluator)  # births of row 2 are still in flight when it stops
-    assert len(first.state.data[KEY]["window"]) == 4
+    assert len(first.state.data[KEY]["window"]) == window
     state = GAState.from_json(first.state.to_json())
-    resumed = Evolution.resume(resolve(REQUEST), state, first.cache, measures=first.measures)
+    resumed = Evolution.resume(resolve(request), state, first.cache, measures=first.measures)
     resumed.run(SerialEvaluator())
     assert resumed.curve() == whole.curve()
     assert resumed.state.to_json() == whole.state.to_json()
@@ -141,6 +143,7 @@ def test_a_window_past_the_population_starts_with_that_many_random_births() -> N
     ("options", "extra", "message"),
     [
         ({"window": 0}, {}, "options.window"),
+        ({"window": 65}, {}, "options.window: 65 is more than 8 populations (64)"),
         ({"parents": "archive"}, {}, 'options.parents: "archive" needs descriptors'),
         ({"parents": "elsewhere"}, {}, "options.parents"),
     ],
