@@ -20,6 +20,8 @@ COPY worker ./worker
 COPY softevo ./softevo
 COPY migrations ./migrations
 COPY examples ./examples
+# the guides `softevo docs` shows (a package of the install: Markdown only)
+COPY docs/*.md ./docs/
 # Then the package itself on top of the lock, touching no dependency. The numba cache directory
 # exists in the image and belongs to softevo, so a fresh named volume mounted there starts with that owner and stays writable.
 RUN pip install --no-deps --no-build-isolation . \

@@ -8,6 +8,7 @@ from __future__ import annotations
 import re
 import shutil
 import subprocess
+import tomllib
 from pathlib import Path
 from typing import Any
 
@@ -127,8 +128,12 @@ def test_dockerfile_runs_as_non_root_and_copies_every_package() -> None:
     assert lock and "COPY requirements/runtime.txt " in dockerfile, "not through the lock"
     on_lock = re.search(r"^RUN pip install --no-deps --no-build-isolation \.\s", dockerfile, re.M)
     assert on_lock and on_lock.start() > lock.start(), "the package is not installed on the lock"
-    for package in ("core", "api", "worker", "softevo", "migrations", "examples"):
-        assert f"COPY {package} " in dockerfile, f"Dockerfile does not copy {package}/"
+    # every folder pyproject.toml installs (a folder left out fails `pip install .` in the image,
+    # as docs/ did once `softevo docs` shipped the guides), and the example robots
+    folders = set(tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"][
+        "package-dir"].values()) | {"examples"}  # fmt: skip
+    for folder in sorted(folders):
+        assert re.search(rf"^COPY {folder}[ /]", dockerfile, re.M), f"no COPY of {folder}/"
     # The numba cache volume is mounted here: it must exist, owned by the user, in the image.
     assert "/home/softevo/.cache/numba" in dockerfile
     # ... and hold the compiled kernels: compiled at build time, as that user, after the install
