@@ -104,7 +104,8 @@ def _search_arguments(run: argparse.ArgumentParser) -> None:
         "map-elites (quality-diversity over --descriptors, by default the map-elites "
         "preset's voxels,actuated x 8,8: writes archive.csv, archive.json and the archive.png "
         "heat map), nsga2 or afpo (several --objectives), steady-state (no generation "
-        "barrier: births told in birth order, --options '{\"window\": W}'), or any other "
+        "barrier: births told in birth order, --options '{\"window\": W}'; W of 2-4 "
+        "populations keeps the cores busy where children often repeat a parent), or any other "
         "installed one (softevo algorithms)",
     )  # fmt: skip
     run.add_argument(
