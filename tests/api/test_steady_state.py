@@ -45,8 +45,10 @@ def test_the_service_gives_the_in_process_curve(db: Database, window: int) -> No
     assert rows.get("cached", 0) == sum(row["saved"] for row in expected)
 
 
-def test_a_takeover_goes_on_with_the_same_births(db: Database) -> None:
-    run = store.create_run(db, resolve(REQUEST))
+@pytest.mark.parametrize("window", [6, 20])
+def test_a_takeover_goes_on_with_the_same_births(db: Database, window: int) -> None:
+    request = {**REQUEST, "options": {"window": window}}
+    run = store.create_run(db, resolve(request))
     frozen = FreezingEvaluator(calls=7)  # frozen in row 1, with births of row 1 and 2 out
     first = Coordinator(
         db, frozen, batch_size=2, lease_seconds=1.0, poll_seconds=0.05, save_seconds=0
@@ -66,7 +68,7 @@ def test_a_takeover_goes_on_with_the_same_births(db: Database) -> None:
         first.stop()
     record = store.get_run(db, run.id)
     assert record.takeovers >= 1 and record.error is None
-    assert store.curve(db, run.id) == undisturbed(REQUEST).curve()
+    assert store.curve(db, run.id) == undisturbed(request).curve()
     rows = _rows(db, run.id)
     assert "pending" not in rows and sum(rows.values()) == 8 * 4
 
