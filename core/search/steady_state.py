@@ -20,6 +20,7 @@ sequence; `Nursery` is the mutable working copy the generation step tells one bi
 
 from __future__ import annotations
 
+import heapq
 import math
 from collections import Counter, deque
 from dataclasses import dataclass, field, replace
@@ -193,9 +194,15 @@ class Nursery:
     row: list[tuple[Individual, float, dict[str, float], bool]] = field(default_factory=list)
     hashes: Counter[str] = field(default_factory=Counter)  # of the window's genomes
     following: GAState | None = None  # the state `finish` gave
+    #: (rank, birth, slot) of every member, a heap: its top is the member a better birth
+    #: replaces (the worst fitness, NaN lowest; of equals, the oldest birth), in O(log P)
+    worst: list[tuple[float, int, int]] = field(default_factory=list, repr=False)
 
     def __post_init__(self) -> None:
         self.hashes.update(birth.individual.genome.hash for birth in self.window)
+        ranked = zip(self.fitness, self.births, strict=True)
+        self.worst = [(_rank(value), number, slot) for slot, (value, number) in enumerate(ranked)]
+        heapq.heapify(self.worst)
         self.archive = None  # the archive as it stands, when parents are drawn from it
         if self.strategy.options.parents == "archive":  # type: ignore[attr-defined]
             config = self.strategy.config
@@ -241,17 +248,16 @@ class Nursery:
             self.population.append(birth.individual)
             self.fitness.append(fitness)
             self.births.append(birth.number)
+            heapq.heappush(self.worst, (_rank(fitness), birth.number, len(self.births) - 1))
             return
         if math.isnan(fitness):
             return
-        ranks = [(-math.inf if math.isnan(value) else value, birth)
-                 for value, birth in zip(self.fitness, self.births, strict=True)]  # fmt: skip
-        lowest = min(ranks)  # the worst fitness; of equals, the oldest birth
-        worst = ranks.index(lowest)
-        if fitness > lowest[0]:
-            self.population[worst] = birth.individual
-            self.fitness[worst] = fitness
-            self.births[worst] = birth.number
+        lowest, _, slot = self.worst[0]  # the worst member (a total order: ties never arise)
+        if fitness > lowest:
+            self.population[slot] = birth.individual
+            self.fitness[slot] = fitness
+            self.births[slot] = birth.number
+            heapq.heapreplace(self.worst, (fitness, birth.number, slot))
 
     def finish(self) -> tuple[GAState, GenerationStats]:
         """The state after the row's P births, and its curve row."""
@@ -276,3 +282,8 @@ class Nursery:
         self.following = state  # the next row goes on from this working copy, not from JSON
         self.strategy.__dict__["_last"] = self
         return state, stats
+
+
+def _rank(fitness: float) -> float:
+    """A member's fitness for replacement: a failed robot (NaN) ranks below every other."""
+    return -math.inf if math.isnan(fitness) else fitness
