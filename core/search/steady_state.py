@@ -168,13 +168,13 @@ class SteadyState(Strategy):
             if elites:
                 picks = [elites[int(i)] for i in rng.integers(0, len(elites), size=2)]
                 pair = (Individual(picks[0].genome, "elite"), Individual(picks[1].genome, "elite"))
-                child = mate(config, self.encoding, pair, (0, 1), rng)[0]
+                child = mate(config, self.encoding, pair, (0, 1), rng, children=1)[0]
                 born = [elite.generation * config.population + elite.index for elite in picks]
                 return replace(child, parents=tuple(born[i] for i in child.parents))
         fitness = np.asarray(nursery.fitness, dtype=np.float64)
         picks = operators.tournament(fitness, 2, config.tournament_size, rng)
         pair = (nursery.population[picks[0]], nursery.population[picks[1]])
-        child = mate(config, self.encoding, pair, (0, 1), rng)[0]
+        child = mate(config, self.encoding, pair, (0, 1), rng, children=1)[0]
         return replace(child, parents=tuple(nursery.births[int(picks[i])] for i in child.parents))
 
 

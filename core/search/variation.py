@@ -21,11 +21,14 @@ def mate(
     pair: tuple[Individual, Individual],
     indices: tuple[int, int],
     rng: np.random.Generator,
+    children: int = 2,
 ) -> list[Individual]:
     """Two children of `pair`: with probability `crossover_probability` a two-point crossover
     of each gene segment (a voxel's own real genes cut with its label), else copies; each then
     mutated with probability `mutation_probability`. Parents are named by `indices`. An
-    encoding that brings its own operators (`cppn`: NEAT) breeds its children itself."""
+    encoding that brings its own operators (`cppn`: NEAT) breeds its children itself.
+    `children=1` leaves out the second child's mutation, the last draws: the first child is
+    the same (steady-state keeps one child a birth and draws nothing after it)."""
     own = getattr(encoding, "mate", None)
     if own is not None:
         return own(config, pair, indices, rng)
@@ -44,8 +47,8 @@ def mate(
             ra, rb = _cut_with_labels(ra, rb, cut, robot, encoding.n_discrete, rng)
         else:
             ra, rb, _ = operators.two_point_crossover(ra, rb, rng)
-    children = []
-    for k, (discrete, real) in enumerate(((a, ra), (b, rb))):
+    bred = []
+    for k, (discrete, real) in enumerate(((a, ra), (b, rb))[:children]):
         label = operator
         if rng.random() < config.mutation_probability:
             label += "+mutation"
@@ -54,8 +57,8 @@ def mate(
             )
             real = operators.mutate_real(real, encoding.real_bounds, config.mutation_sigma, rng)
         parents = tuple(int(i) for i in indices) if operator == "crossover" else (int(indices[k]),)
-        children.append(Individual(encoding.genome(discrete, real), label, parents))
-    return children
+        bred.append(Individual(encoding.genome(discrete, real), label, parents))
+    return bred
 
 
 def mutant(
