@@ -20,6 +20,7 @@ from softevo.core.robots.encodings import Encoding, EncodingError
 from softevo.core.robots.genome import Genome
 from softevo.core.search.registry import strategy_class
 from softevo.core.search.state import GAState, Individual
+from softevo.core.search.steady_state import window_size
 
 
 class ResumeError(ValueError):
@@ -214,7 +215,7 @@ def _check_births(config: RunConfig, encoding: Encoding, state: GAState) -> None
     _expect(isinstance(births, list) and len(births) == len(state.previous or [])
             and all(_is_int(n) and 0 <= n < told for n in births), "state.json: data.steady.births",
             f"a birth number below {told} per member", births)  # fmt: skip
-    window, size = kept.get("window"), config.options.get("window") or config.population
+    window, size = kept.get("window"), window_size(config.options, config.population)
     _expect(isinstance(window, list) and len(window) == size, "state.json: data.steady.window",
             f"a list of {size} births (the window)", window)  # fmt: skip
     for i, item in enumerate(window):

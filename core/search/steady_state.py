@@ -72,6 +72,11 @@ class SteadyStateOptions(BaseModel):
     )
 
 
+def window_size(options: dict[str, Any], population: int) -> int:
+    """W of a run whose `options` are these: the births its state holds in flight."""
+    return options.get("window") or population
+
+
 def birth_rng(seed: int, birth: int) -> np.random.Generator:
     """The generator of birth `birth` of a run: a function of the seed and n only."""
     return np.random.default_rng(np.random.SeedSequence([seed, _BIRTHS, birth]))
@@ -120,7 +125,7 @@ class SteadyState(Strategy):
 
     @property
     def window(self) -> int:
-        return self.options.window or self.config.population  # type: ignore[attr-defined]
+        return window_size(self.config.options, self.config.population)
 
     @property
     def total(self) -> int:
