@@ -1,7 +1,8 @@
 """What an accepted run or sweep may cost, counted before anything runs: simulated spring-steps
 (the springs of the full bounding box x integration steps x the simulations the config can ask
 for x what its terrain and objective cost against flat ground, an upper bound) and stored bytes
-(every individual's row with its genome, and a quality-diversity archive's elites). Over the
+(every individual's row with its genome, the genomes the run's state holds, and a
+quality-diversity archive's elites). Over the
 service's budget, the request is refused with both figures and the setting that raises it."""
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from softevo.core.config import RunConfig
+from softevo.core.search.registry import strategy_class
 from softevo.core.search.vectors import needs_energy
 
 #: A stored individual's row beyond its genes (ids, hash, operator, parents, times), bytes.
@@ -58,8 +60,9 @@ def cost_factor(config: RunConfig) -> float:
 
 
 def run_cost(config: RunConfig) -> Cost:
-    """The most one run can cost: every individual of every generation simulated, and with
-    descriptors an archive with as many elites as it has cells (or individuals, if fewer)."""
+    """The most one run can cost: every individual of every generation simulated, the genomes
+    its strategy's state holds (`Strategy.state_genomes`), and with descriptors an archive with
+    as many elites as it has cells (or individuals, if fewer)."""
     individuals = config.population * config.generations
     encoding = config.make_encoding()
     genome_bytes = getattr(encoding, "genome_bytes", None) or (
@@ -67,10 +70,11 @@ def run_cost(config: RunConfig) -> Cost:
     )  # an encoding of variable length (cppn) says what a genome of it may take
     elites = min(math.prod(config.bins), individuals) if config.descriptors else 0
     elite_bytes = ELITE_BYTES + ELITE_DESCRIPTOR_BYTES * len(config.descriptors) + genome_bytes
+    state = strategy_class(config.algorithm).state_genomes(config.ga_config()) * genome_bytes
     simulations = float(box_springs(config.shape)) * config.sim.n_steps * individuals
     return Cost(
         spring_steps=simulations * cost_factor(config),
-        stored_bytes=float(individuals) * (ROW_BYTES + genome_bytes) + elites * elite_bytes,
+        stored_bytes=float(individuals) * (ROW_BYTES + genome_bytes) + state + elites * elite_bytes,
     )
 
 

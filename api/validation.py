@@ -56,9 +56,9 @@ def check_budget(configs: list[RunConfig], limits: Limits, loc: list[str | int])
                            "SOFTEVO_MAX_SPRING_STEPS")  # fmt: skip
     if cost.stored_bytes > limits.max_stored_bytes:
         raise RequestError(loc, f"{what} would store about {cost.stored_bytes:.3g} bytes of "
-                           f"individuals and archive, over the budget of "
+                           f"individuals, state and archive, over the budget of "
                            f"{limits.max_stored_bytes:.3g}; ask for less (population, "
-                           "generations, shape, bins) or raise "
+                           "generations, shape, bins, options.window) or raise "
                            "SOFTEVO_MAX_STORED_BYTES")  # fmt: skip
 
 

@@ -123,6 +123,11 @@ class SteadyState(Strategy):
         if config.options.get("parents") == "archive" and not config.descriptors:
             raise ValueError('options.parents: "archive" needs descriptors and bins')
 
+    @classmethod
+    def state_genomes(cls, config: GAConfig) -> int:
+        """The population and the W births in flight."""
+        return config.population + window_size(config.options, config.population)
+
     @property
     def window(self) -> int:
         return window_size(self.config.options, self.config.population)

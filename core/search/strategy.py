@@ -75,6 +75,12 @@ class Strategy(ABC):
     def check(cls, config: GAConfig) -> None:
         """Raise ValueError (naming the field) for settings this strategy cannot run with."""
 
+    @classmethod
+    def state_genomes(cls, config: GAConfig) -> int:
+        """Most genomes the run's state holds at once (the service's budget counts them): by
+        default a population, the generation the next is bred from."""
+        return config.population
+
     def start(self, seed: int) -> GAState:
         return GAState(seed=seed)
 

@@ -39,7 +39,7 @@ def test_the_papers_experiments_fit_the_default_budget() -> None:
          ["4.47e+15 spring-steps", "SOFTEVO_MAX_SPRING_STEPS"]),
         ({"preset": "quick", "encoding": "spring", "shape": [8, 8, 8], "population": 1000,
           "generations": 1000, "sim": {"duration": 0.5, "settle_time": 0.1}},
-         ["1.63e+10 bytes", "SOFTEVO_MAX_STORED_BYTES"]),
+         ["1.64e+10 bytes", "SOFTEVO_MAX_STORED_BYTES"]),  # rows 1.63e10, + the state's
     ],
 )  # fmt: skip
 def test_a_run_over_the_budget_is_refused_with_its_cost(
@@ -114,3 +114,21 @@ def test_a_run_within_the_budget_on_flat_ground_is_refused_on_rough(
     rough = {"preset": "quick", "sim": {"terrain": {"kind": "rough"}}}
     response = client.post("/runs", json=rough)
     assert response.status_code == 422 and "cost factor" in response.json()["detail"][0]["msg"]
+
+
+def test_a_steady_state_window_is_counted_in_the_stored_bytes(
+    make_client: Callable[..., TestClient],
+) -> None:
+    """The W births in flight live in the run's state: a window of 8 populations is refused
+    where the default one fits, and the error names the stored bytes and the window."""
+    request = {"preset": "quick", "algorithm": "steady-state"}
+    narrow = run_cost(resolve(request)).stored_bytes
+    wide = {**request, "options": {"window": 128}}  # 8 x the population of 16
+    genome = run_cost(resolve(wide)).stored_bytes - narrow
+    assert genome > 0 and genome % (128 - 16) == 0  # one genome's bytes per birth more
+    client = make_client(limits=Limits(max_stored_bytes=int(narrow + genome / 2)))
+    assert client.post("/runs", json=request).status_code == 201
+    response = client.post("/runs", json=wide)
+    assert response.status_code == 422
+    message = response.json()["detail"][0]["msg"]
+    assert "bytes of individuals, state and archive" in message and "options.window" in message
