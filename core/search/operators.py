@@ -85,7 +85,7 @@ def grouped_truncation(
 def tournament(fitness: np.ndarray, n: int, size: int, rng: np.random.Generator) -> np.ndarray:
     """`n` winners, each the best of `size` individuals drawn uniformly (NaN loses)."""
     entrants = rng.integers(0, len(fitness), size=(n, size))
-    key = fitness[entrants]  # only the entrants' (a steady-state birth's is 2 x size of P)
+    key = fitness[entrants]  # only the entrants (2 x size values, not the population's P)
     key = np.where(np.isnan(key), -np.inf, key)
     return entrants[np.arange(n), np.argmax(key, axis=1)]
 
