@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import json
 import math
-import multiprocessing
 import threading
 from collections import Counter, OrderedDict
 from collections.abc import Callable, Iterator
@@ -183,13 +182,13 @@ def _processes() -> ProcessPoolExecutor:
     """The replays' own processes (RUNNING_AT_ONCE, niced, gone with this one), made on the
     first replay this process computes."""
     global _pool
-    from softevo.core.physics.evaluation import start_pool_process
+    from softevo.core.physics.evaluation import pool_context, start_pool_process
 
     with _lock:
         if _pool is None:
             _pool = ProcessPoolExecutor(
                 RUNNING_AT_ONCE,
-                mp_context=multiprocessing.get_context("spawn"),
+                mp_context=pool_context(),
                 initializer=start_pool_process,
             )
         return _pool

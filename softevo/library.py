@@ -127,7 +127,8 @@ class Run:
     """A run in this process, one generation per `step()` (or `for row in run:`). It holds its
     evaluator (`workers` processes, default one per core; 1 = serial, in this process) from the
     first step until `close()` or the end of `finish()`, so stepping pays a pool's start once.
-    Pool processes are spawned and import the main module: a script guards its calls with
+    Pool processes are forked from a fork server that has loaded the physics (spawned where
+    there is none, on Windows) and import the main module: a script guards its calls with
     `if __name__ == "__main__":`."""
 
     def __init__(self, evolution: Evolution, workers: int | None = None) -> None:
