@@ -211,15 +211,20 @@ class RQEvaluator(Evaluator):
         expected = self.expected_seconds(files)
         # RQ kills a work horse 60 s after this: the hard limit for a job that runs away
         timeout = 600 if expected is None else max(60, math.ceil(20 * expected))
-        self.queue.enqueue(
-            self.job_function,
-            args=(key, files, *extra),
-            job_id=job_id,
-            job_timeout=timeout,
-            meta={"engine": self.engine},
-            result_ttl=600,
-            failure_ttl=3600,
-        )
+        # on a pipeline of our own: RQ sends the job and its queue in one round trip, where it
+        # would otherwise send the queue's name in a transaction of its own first
+        with self.connection.pipeline() as pipe:
+            self.queue.enqueue(
+                self.job_function,
+                args=(key, files, *extra),
+                job_id=job_id,
+                job_timeout=timeout,
+                meta={"engine": self.engine},
+                result_ttl=600,
+                failure_ttl=3600,
+                pipeline=pipe,
+            )
+            pipe.execute()
         return job_id
 
     def collect(
