@@ -211,19 +211,12 @@ class RQEvaluator(Evaluator):
         expected = self.expected_seconds(files)
         # RQ kills a work horse 60 s after this: the hard limit for a job that runs away
         timeout = 600 if expected is None else max(60, math.ceil(20 * expected))
-        # on a pipeline of our own: RQ sends the job and its queue in one round trip, where it
-        # would otherwise send the queue's name in a transaction of its own first
+        # on a pipeline of ours, RQ sends the job and its queue's name in one round trip, not two
         with self.connection.pipeline() as pipe:
             self.queue.enqueue(
-                self.job_function,
-                args=(key, files, *extra),
-                job_id=job_id,
-                job_timeout=timeout,
-                meta={"engine": self.engine},
-                result_ttl=600,
-                failure_ttl=3600,
-                pipeline=pipe,
-            )
+                self.job_function, args=(key, files, *extra), job_id=job_id, job_timeout=timeout,
+                meta={"engine": self.engine}, result_ttl=600, failure_ttl=3600, pipeline=pipe,
+            )  # fmt: skip
             pipe.execute()
         return job_id
 
