@@ -142,13 +142,20 @@ PRELOAD = "softevo.core.physics.preload"
 
 def pool_context() -> multiprocessing.context.BaseContext:
     """How pool processes start: forked from a fork server that has imported the physics and
-    loaded the kernels once (a 2-process pool started 4x faster here: 0.34 s against 1.2 s
-    spawned), or spawned where the platform has no fork server (Windows). Either way a process
-    starts clean of the parent's threads and connections, and imports the main module."""
+    loaded the kernels once (a later pool starts 34x quicker, bench/pool_start.py), or spawned
+    where there is no fork server (Windows) or it cannot start (it needs a socket in a writable
+    temporary folder). Either way a process starts clean of the parent's threads and
+    connections, and imports the main module."""
     if "forkserver" not in multiprocessing.get_all_start_methods():
         return multiprocessing.get_context("spawn")
+    from multiprocessing import forkserver  # a POSIX module: imported where there is one
+
     context = multiprocessing.get_context("forkserver")
     context.set_forkserver_preload([PRELOAD])
+    try:
+        forkserver.ensure_running()  # started now, not in the first submit where it can fail
+    except OSError:
+        return multiprocessing.get_context("spawn")
     return context
 
 
