@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import subprocess
 import sys
-from collections import Counter
 from pathlib import Path
 from typing import Any
 
@@ -43,16 +42,6 @@ def pytest_sessionstart(session: pytest.Session) -> None:
             raise pytest.UsageError(
                 f"loading the physics kernels failed (exit {process.returncode})"
             )
-
-
-def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """The files with the most `slow` tests first, then the others by their number of tests,
-    each file's tests together and in their order. pytest-xdist hands files out in this order
-    (`--no-loadscope-reorder`, in pyproject): the longest start first, so none is left running
-    alone at the end while the other processes idle (docs/reliability.md#suite-time)."""
-    slow: Counter[Path] = Counter(item.path for item in items if item.get_closest_marker("slow"))
-    tests: Counter[Path] = Counter(item.path for item in items)
-    items.sort(key=lambda item: (-slow[item.path], -tests[item.path], str(item.path)))
 
 
 _FAULT_REPORTS: list[tuple[str, list[str]]] = []
