@@ -20,6 +20,7 @@ import statistics
 import subprocess
 import sys
 import time
+from concurrent.futures import ThreadPoolExecutor
 
 METHODS = ("spawn", "forkserver")
 
@@ -40,10 +41,8 @@ def once(method: str, pools: int) -> list[float]:
     for _ in range(pools):
         started = time.perf_counter()
         pool = evaluation.PoolEvaluator(2)
-        # two batches at once: one in each process
-        future = pool._pool.submit(evaluation.evaluate_robot_files, files[:1])
-        pool.evaluate_batch(files[1:])
-        future.result()
+        with ThreadPoolExecutor(2) as threads:  # two batches at once: one in each process
+            list(threads.map(pool.evaluate_batch, ([file] for file in files)))
         seconds.append(time.perf_counter() - started)
         pool.close()
     return seconds
