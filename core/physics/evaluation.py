@@ -142,7 +142,7 @@ PRELOAD = "softevo.core.physics.preload"
 
 def pool_context() -> multiprocessing.context.BaseContext:
     """How pool processes start: forked from a fork server that has imported the physics and
-    loaded the kernels once (a later pool starts 34x quicker, bench/pool_start.py), or spawned
+    loaded the kernels once (a later pool starts about 30x quicker, bench/pool_start.py), or spawned
     where there is no fork server (Windows) or it cannot start (it needs a socket in a writable
     temporary folder). Either way a process starts clean of the parent's threads and
     connections, and imports the main module."""
