@@ -159,7 +159,7 @@ class RunDriver(Hooks):
 
     def run(self) -> None:
         try:
-            self._drive()
+            self.drive()
         except Stop as stop:
             log.info("run %s: driver stopped (%s)", self.run_id, stop)
             self._drop_if_cancelled()
@@ -202,7 +202,8 @@ class RunDriver(Hooks):
         except (OperationalError, InterfaceError, InternalError) as error:
             self.driving.faults.record(error, f"run {self.run_id}")
 
-    def _drive(self) -> None:
+    def drive(self) -> None:
+        """Run the remaining generations; errors raise (`run` records them on the run)."""
         stored_config, stored_state = store.driving.load(self.db, self.run_id)
         config = RunConfig.model_validate(stored_config)
         algorithm = make_strategy(config.ga_config(), config.make_encoding())
@@ -253,6 +254,11 @@ class RunDriver(Hooks):
         self._fenced(store.driving.commit_generation, commit)
         self.kept = step.stats.generation + 1 if upcoming else None
         self.driving.faults.clear()  # a generation committed: the database takes writes
+        self.committed(step)
+
+    def committed(self, step: Step) -> None:
+        """After each generation's commit: nothing for the service (`softevo run` shows its
+        progress and writes its files)."""
 
 
 def members(individuals: list[Individual]) -> list[dict[str, Any]]:

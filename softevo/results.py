@@ -23,16 +23,15 @@ interrupted run still has its partial results (population.csv gets each generati
 from __future__ import annotations
 
 import csv
+import itertools
 import json
 import math
 import os
-import time
-from dataclasses import replace
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
 from softevo.core.config import ConfigError, resolve
-from softevo.core.limits import SAVE_SECONDS
 from softevo.core.nulls import from_null, from_null_record, to_null
 from softevo.core.search.algorithm import GAState
 from softevo.core.search.evolution import Evolution
@@ -83,72 +82,57 @@ def write_results(out: Path, evolution: Evolution) -> None:
     os.replace(temporary, out / "curve.csv")
 
 
-class Checkpoints:
-    """The run's files, kept up to date as it goes: population.csv after every generation, the
-    rest at most every `seconds`. Rewriting every file after every generation costs time that
-    grows with the run (its curve, state and cache): a 1000-generation paper-cube run took 52 s
-    through `softevo run` against 22 s for its evolution alone. `done` is called between
-    generations, where the run is whole; `flush` writes the last whole generation (after an
-    interrupt, which may come halfway through updating the run)."""
-
-    def __init__(self, out: Path, evolution: Evolution, seconds: float = SAVE_SECONDS) -> None:
-        self.out, self.seconds = out, seconds
-        self.whole: Evolution | None = None  # the last whole generation's run, until written
-        self.written = time.monotonic()
-        self.evolution = evolution
-
-    def done(self) -> None:
-        append_population(self.out, self.evolution)
-        # the run as it is now (a step replaces its state and counters, and adds to its cache
-        # and measures in place), kept until written: an interrupt during the write leaves it
-        # to `flush`
-        evolution = self.evolution
-        self.whole = replace(
-            evolution, cache=dict(evolution.cache), measures=dict(evolution.measures)
-        )
-        if time.monotonic() - self.written >= self.seconds:
-            self.flush()
-            self.written = time.monotonic()
-
-    def flush(self) -> None:
-        if self.whole is not None:
-            write_results(self.out, self.whole)
-            self.whole = None
-
-
 POPULATION_COLUMNS = ("generation", "index", "fitness", "operator")
 
 
-def append_population(out: Path, evolution: Evolution) -> None:
-    """Add the generation just evaluated to population.csv (started afresh at generation 0):
-    `POPULATION_COLUMNS`, then one column per measure of the first generation's records (a file
-    begun before records keeps its own columns)."""
-    state = evolution.state
-    if state.previous is None or state.previous_fitness is None:
-        return
-    generation = state.generation - 1
+def write_population(out: Path, rows: Iterable[Any], append: bool = False) -> None:
+    """population.csv from the store's rows (generation, index, fitness, operator, measures;
+    `softevo.api.store.folders.population`), or `append` them: `POPULATION_COLUMNS`, then one
+    column per measure of the first generation's records (an appended file keeps its own)."""
     path = out / "population.csv"
-    records = [evolution.measures.get(item.genome.hash, {}) for item in state.previous]
-    if generation == 0:
-        names = list(dict.fromkeys(name for record in records for name in record))
-    else:
-        names = _population_header(path)[len(POPULATION_COLUMNS) :]
-    with path.open("w" if generation == 0 else "a", newline="", encoding="utf-8") as handle:
+    rows = iter(rows)
+    first = next(rows, None)
+    if first is None and append:
+        return
+    names = _population_header(path)[len(POPULATION_COLUMNS) :] if append else None
+    temporary = path if append else out / "population.csv.tmp"
+    with temporary.open("a" if append else "w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle, lineterminator="\n")
-        if generation == 0:
+        pending = [] if first is None else [first]
+        if names is None:
+            pending += _first_generation(rows, pending)
+            names = list(
+                dict.fromkeys(
+                    n for row in pending if row[0] == pending[0][0] for n in (row[4] or {})
+                )
+            )
             writer.writerow([*POPULATION_COLUMNS, *names])
-        for index, (item, value, record) in enumerate(
-            zip(state.previous, state.previous_fitness, records, strict=True)
-        ):
+        for generation, index, fitness, operator, record in itertools.chain(pending, rows):
+            record = record or {}
             writer.writerow(
-                [generation, index, _cell(value), item.operator,
-                 *(_cell(record.get(name, math.nan)) for name in names)]
+                [generation, index, _cell(fitness), operator,
+                 *(_cell(record.get(name)) for name in names)]
             )  # fmt: skip
+    if not append:
+        os.replace(temporary, path)
 
 
-def _cell(value: float) -> float | str:
+def _first_generation(rows: Iterator[Any], pending: list[Any]) -> list[Any]:
+    """The rest of the first row's generation, taken from `rows` (their measures name the
+    columns)."""
+    taken: list[Any] = []
+    if not pending:
+        return taken
+    for row in rows:
+        taken.append(row)
+        if row[0] != pending[0][0]:
+            break
+    return taken
+
+
+def _cell(value: float | None) -> float | str:
     """A number as population.csv writes it: empty when not finite (failed, not measured)."""
-    return value if math.isfinite(value) else ""
+    return value if value is not None and math.isfinite(value) else ""
 
 
 def _population_header(path: Path) -> list[str]:

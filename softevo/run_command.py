@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
+import math
 import sys
 from pathlib import Path
 from typing import Any
@@ -12,6 +13,8 @@ from typing import Any
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
+from softevo import run_store
+from softevo.api.store import folders
 from softevo.core.config import PRESET_DESCRIPTIONS, PRESETS, ConfigError, RunConfig, resolve
 from softevo.core.objectives import OBJECTIVES
 from softevo.core.outputs import figures
@@ -19,16 +22,11 @@ from softevo.core.outputs.archive_figures import archive_figure
 from softevo.core.outputs.front_figure import front_figure
 from softevo.core.search.descriptors import CATALOGUE
 from softevo.core.search.evolution import Evolution
-from softevo.library import Result, Run
-from softevo.results import (
-    Checkpoints,
-    read_results,
-    read_resumable,
-    write_archive,
-    write_front,
-    write_results,
-)
-from softevo.resume_checks import ResumeError, check_folder
+from softevo.core.search.generation import Step
+from softevo.library import Result
+from softevo.results import read_results, write_archive, write_front
+from softevo.resume_checks import ResumeError
+from softevo.run_store import Checkpoints, Folder
 
 DESCRIPTION = (
     "Evolve robots in this process with a live progress bar. While it runs (at least "
@@ -221,7 +219,7 @@ def _not_anothers(args: argparse.Namespace, out: Path, config: RunConfig) -> Non
         )
 
 
-def _evolution(args: argparse.Namespace) -> tuple[Evolution, Path]:
+def _folder(args: argparse.Namespace) -> Folder:
     """The run to do and its folder: a new one, or (--resume) a stopped one."""
     if args.resume is not None:
         given = [f"--{name}" for name in _CONFIG_FLAGS if getattr(args, name) is not None]
@@ -233,20 +231,18 @@ def _evolution(args: argparse.Namespace) -> tuple[Evolution, Path]:
         try:
             if not folder.is_dir():
                 raise ValueError(f"{folder}: not a resumable `softevo run` folder (not a folder)")
-            check_folder(folder, args.generations)  # a tampered folder: one line, before all
-            evolution = read_resumable(folder, args.generations)
+            return run_store.resume(_writable(args, folder), args.generations)
         except ResumeError as error:
             args.parser.error(f"--resume {folder}/{error}")
         except ValueError as error:
             args.parser.error(f"--resume {error}")
-        return evolution, _writable(args, Path(args.resume))
     try:
         config = resolve(_request(args))
     except ConfigError as error:
         args.parser.error(str(error))
     out = Path(args.out) if args.out else default_out(config)
     _not_anothers(args, out, config)
-    return Evolution.start(config), _writable(args, out)
+    return run_store.new(_writable(args, out), config)
 
 
 _CONFIG_FLAGS = ("preset", "shape", "encoding", "seed", "population", "duration", "objective",
@@ -277,10 +273,40 @@ def _figures(out: Path, evolution: Evolution) -> None:
 def run_command(args: argparse.Namespace) -> int:
     if args.workers is not None and args.workers < 1:
         args.parser.error(f"--workers must be >= 1, got {args.workers}")
-    evolution, out = _evolution(args)
-    config = evolution.config
-    console = Console(stderr=True)
-    columns = (
+    folder = _folder(args)
+    try:
+        return _run(args, folder)
+    finally:
+        folder.close()
+
+
+def _run(args: argparse.Namespace, folder: Folder) -> int:
+    out, config = folder.out, folder.config
+    generations = args.generations if args.resume and args.generations else config.generations
+    checkpoints = Checkpoints(folder)
+    try:
+        with Progress(*_columns(config), console=Console(stderr=True), transient=args.json) as bar:
+            _drive(folder, args.workers, generations, checkpoints, bar)
+    except KeyboardInterrupt:
+        evolution = checkpoints.flush()
+        done = len(evolution.state.history)
+        if done:
+            _figures(out, evolution)
+        print(
+            f"interrupted after {done} of {generations} generations; "
+            f"partial results{' and figures' if done else ''} in {out}/; "
+            f"go on with: softevo run --resume {out}",
+            file=sys.stderr,
+        )
+        return 130
+    evolution = checkpoints.flush()
+    _figures(out, evolution)
+    _print_summary(args, Result.of(evolution), out)
+    return 0
+
+
+def _columns(config: RunConfig) -> tuple[Any, ...]:
+    return (
         TextColumn("generation"),
         MofNCompleteColumn(),
         BarColumn(),
@@ -290,40 +316,29 @@ def run_command(args: argparse.Namespace) -> int:
         ),
         TimeRemainingColumn(),
     )
-    checkpoints = Checkpoints(out, evolution)
-    try:
-        with Progress(*columns, console=console, transient=args.json) as progress:
-            done = len(evolution.state.history)
-            task = progress.add_task(
-                "run", total=config.generations, completed=done, best="-", rate="-"
-            )
 
-            def report(update: Any) -> None:
-                checkpoints.done()
-                progress.update(
-                    task,
-                    completed=update.stats.generation + 1,
-                    best=f"{update.stats.best_so_far:.4f}",
-                    rate=f"{update.evaluations_per_second:.1f}",
-                )
 
-            result = Run(evolution, args.workers).finish(on_generation=report)
-    except KeyboardInterrupt:
-        checkpoints.flush()
-        done = len(evolution.state.history)
-        if done:
-            _figures(out, evolution)
-        print(
-            f"interrupted after {done} of {config.generations} generations; "
-            f"partial results{' and figures' if done else ''} in {out}/; "
-            f"go on with: softevo run --resume {out}",
-            file=sys.stderr,
+def _drive(
+    folder: Folder, workers: int | None, generations: int, checkpoints: Checkpoints, bar: Progress
+) -> None:
+    """The run to its end through the store, the bar and the files following each generation."""
+    done, evaluations, _, elapsed = folders.totals(folder.db, folder.run_id)
+    task = bar.add_task("run", total=generations, completed=done, best="-", rate="-")
+    counted = {"evaluations": evaluations, "elapsed": elapsed}
+
+    def report(step: Step) -> None:
+        checkpoints.done()
+        counted["evaluations"] += step.stats.evaluations
+        counted["elapsed"] += step.seconds
+        rate = counted["evaluations"] / counted["elapsed"] if counted["elapsed"] > 0 else math.nan
+        bar.update(
+            task,
+            completed=step.stats.generation + 1,
+            best=f"{step.stats.best_so_far:.4f}",
+            rate=f"{rate:.1f}",
         )
-        return 130
-    write_results(out, evolution)
-    _figures(out, evolution)
-    _print_summary(args, result, out)
-    return 0
+
+    run_store.drive(folder, workers, generations, report)
 
 
 def _value(fitness: float | None) -> str:

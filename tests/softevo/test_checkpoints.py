@@ -1,33 +1,51 @@
-"""`softevo run`'s files are rewritten at most every SAVE_SECONDS and when the run stops; population
-rows go out after every generation; an interrupt halfway through a step writes the last whole
-generation, from which a resumed run goes on to the uninterrupted curve and counts."""
+"""`softevo run` keeps its run in the service's store (run.db in the folder) and writes the other
+files from it, at most every SAVE_SECONDS and when the run stops: an interrupt, between
+generations or halfway through one, loses nothing committed, keeps the fitness that landed, and
+`--resume` goes on to the uninterrupted run's curve, counts and files. A folder written before
+the store is imported on resume and goes on the same way."""
 
 from __future__ import annotations
 
-import csv
 import json
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 
-from softevo import results
+from softevo import library, run_store
+from softevo.api.driver import RunDriver
+from softevo.api.store import folders
 from softevo.core.config import resolve
-from softevo.core.physics.evaluation import SerialEvaluator
-from softevo.core.search.evolution import Evolution
-from softevo.results import Checkpoints, read_resumable
+from softevo.core.search.generation import Step
 
 CONFIG = {"preset": "quick", "population": 6, "generations": 4, "seed": 3, "shape": [2, 2, 2],
           "sim": {"duration": 1.0}}  # fmt: skip
-
-
-def generations_in_population(out: Path) -> list[int]:
-    with (out / "population.csv").open(newline="", encoding="utf-8") as handle:
-        return sorted({int(row["generation"]) for row in csv.DictReader(handle)})
-
-
 #: NSGA-II and AFPO with objectives: their kept values, births, lineages and the front so far
-#: ride in the state, and must come back from the files as they were.
+#: ride in the state, and must come back from the store as they were.
 PARETO = {"objectives": ["speed", "-cost_of_transport"]}
+
+
+def stop_after(generations: int) -> Callable[[Step], None]:
+    """A report that presses Ctrl-C once `generations` are committed."""
+
+    def report(step: Step) -> None:
+        if step.stats.generation + 1 == generations:
+            raise KeyboardInterrupt
+
+    return report
+
+
+def finish(out: Path, generations: int) -> library.Result:
+    folder = run_store.resume(out, generations)
+    run_store.drive(folder, 1, generations, lambda step: None)
+    return library.Result.of(run_store.Checkpoints(folder).flush())
+
+
+def same(result: library.Result, whole: library.Result) -> None:
+    assert result.curve == whole.curve
+    assert (result.evaluations, result.saved) == (whole.evaluations, whole.saved)
+    assert result.state == whole.state and result.archive == whole.archive
+    assert result.front == whole.front and result.measures == whole.measures
 
 
 @pytest.mark.parametrize(
@@ -35,61 +53,74 @@ PARETO = {"objectives": ["speed", "-cost_of_transport"]}
     [{}, {"algorithm": "nsga2", **PARETO}, {"algorithm": "afpo", **PARETO}],
     ids=["ga", "nsga2", "afpo"],
 )
-def test_an_interrupt_writes_the_last_whole_generation_and_resuming_goes_on(
+def test_an_interrupt_between_generations_resumes_to_the_uninterrupted_run(
     tmp_path: Path, changes: dict
 ) -> None:
     config = resolve({**CONFIG, **changes})
-    whole = Evolution.start(config)
-    whole.run(SerialEvaluator())
-    evolution, evaluator = Evolution.start(config), SerialEvaluator()
-    checkpoints = Checkpoints(tmp_path, evolution, seconds=3600.0)
-    for _ in range(2):
-        evolution.step(evaluator)
-        checkpoints.done()
-    assert not (tmp_path / "state.json").exists()  # not due yet
-    assert generations_in_population(tmp_path) == [0, 1]  # every generation as it ends
-
-    evolution.step(evaluator)  # a third step, then interrupted before its `done`: what the
-    evolution.evaluations += 1000  # files get is generation 2's, not the live run's
-    checkpoints.flush()
-    cache = json.loads((tmp_path / "cache.json").read_text())
-    assert cache["generation"] == 2
-    assert len(json.loads((tmp_path / "curve.json").read_text())["generations"]) == 2
-
-    resumed = read_resumable(tmp_path, 4)
-    resumed.run(SerialEvaluator())
-    assert resumed.curve() == whole.curve()
-    assert (resumed.evaluations, resumed.saved) == (whole.evaluations, whole.saved)
-    assert resumed.state.data == whole.state.data  # the front so far, and what breeding reads
+    whole = library.evolve(config, workers=1)
+    folder = run_store.new(tmp_path, config)
+    with pytest.raises(KeyboardInterrupt):
+        run_store.drive(folder, 1, config.generations, stop_after(2))
+    assert folder.done == 2
+    same(finish(tmp_path, config.generations), whole)
     if changes:
-        assert whole.curve()[-1]["front_size"] >= 1 and whole.state.data["front"]
+        assert whole.curve[-1]["front_size"] >= 1 and whole.state["data"]["front"]
 
 
-def test_due_checkpoints_write_every_file(tmp_path: Path) -> None:
-    evolution = Evolution.start(resolve(CONFIG))
-    checkpoints = Checkpoints(tmp_path, evolution, seconds=0.0)
-    evolution.step(SerialEvaluator())
-    checkpoints.done()
-    assert json.loads((tmp_path / "cache.json").read_text())["generation"] == 1
-    checkpoints.flush()  # nothing newer to write
-    assert json.loads((tmp_path / "state.json").read_text())["generation"] == 1
-
-
-def test_an_interrupt_during_a_write_leaves_the_whole_generation_to_flush(
+def test_an_interrupt_halfway_through_a_generation_keeps_what_landed(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    evolution = Evolution.start(resolve(CONFIG))
-    checkpoints = Checkpoints(tmp_path, evolution, seconds=0.0)
-    evolution.step(SerialEvaluator())
+    config = resolve({**CONFIG, "population": 12})
+    whole = library.evolve(config, workers=1)
+    landed = RunDriver.batch
+    calls: list[int] = []
 
-    def interrupted(out: Path, run: Evolution) -> None:
-        (out / "cache.json").write_text('{"generation": -1}')  # half a write
-        raise KeyboardInterrupt
+    def interrupted(driver: RunDriver, generation: int, indices: list[int], result) -> None:  # type: ignore[no-untyped-def]
+        landed(driver, generation, indices, result)
+        calls.append(generation)
+        if generation == 1:  # a batch of generation 1 landed, and was written
+            raise KeyboardInterrupt
 
-    monkeypatch.setattr(results, "write_results", interrupted)
+    monkeypatch.setattr(RunDriver, "batch", interrupted)
+    monkeypatch.setattr(run_store, "SAVE_SECONDS", 0.0)  # every batch is written as it lands
+    folder = run_store.new(tmp_path, config)
     with pytest.raises(KeyboardInterrupt):
-        checkpoints.done()
+        run_store.drive(folder, 1, config.generations, lambda step: None)
     monkeypatch.undo()
+    assert folder.done == 1
+    kept = folders.population(folder.db, folder.run_id, before=2, after=0)
+    assert any(row.fitness is not None for row in kept)  # kept, not simulated again
+    same(finish(tmp_path, config.generations), whole)
+
+
+def test_files_wait_for_their_due_time_and_the_last_write_has_them_all(tmp_path: Path) -> None:
+    config = resolve(CONFIG)
+    folder = run_store.new(tmp_path, config)
+    checkpoints = run_store.Checkpoints(folder, seconds=3600.0)
+    run_store.drive(folder, 1, config.generations, lambda step: checkpoints.done())
+    assert not (tmp_path / "state.json").exists()  # not due yet
     checkpoints.flush()
-    assert json.loads((tmp_path / "cache.json").read_text())["generation"] == 1
-    assert read_resumable(tmp_path).state.generation == 1
+    assert json.loads((tmp_path / "state.json").read_text())["generation"] == 4
+    assert json.loads((tmp_path / "cache.json").read_text())["generation"] == 4
+    rows = (tmp_path / "population.csv").read_text().splitlines()
+    assert len(rows) == 1 + 6 * 4 and rows[1].startswith("0,0,")
+
+
+def test_a_folder_from_before_the_store_is_imported_and_goes_on(tmp_path: Path) -> None:
+    config = resolve(CONFIG)
+    whole_out = tmp_path / "whole"
+    whole_out.mkdir()
+    folder = run_store.new(whole_out, config)
+    run_store.drive(folder, 1, config.generations, lambda step: None)
+    whole = library.Result.of(run_store.Checkpoints(folder).flush())
+    old = tmp_path / "old"  # what the release before the store left: its files alone
+    old.mkdir()
+    half = run_store.new(old, resolve({**CONFIG, "generations": 2}))
+    run_store.drive(half, 1, 2, lambda step: None)
+    run_store.Checkpoints(half).flush()
+    half.db.dispose()
+    for name in ("run.db", "run.db-wal", "run.db-shm"):
+        (old / name).unlink(missing_ok=True)
+    same(finish(old, config.generations), whole)
+    for name in ("population.csv", "curve.csv", "curve.json", "best_robot.json", "state.json"):
+        assert (old / name).read_bytes() == (whole_out / name).read_bytes(), name

@@ -1,6 +1,7 @@
 """`softevo run --resume DIR` on a folder that was tampered with: each case ends in one line
-naming the file, before anything runs, and none is silently accepted (issue 39). The untouched
-folder still resumes."""
+naming the file, before anything runs, and none is silently accepted (issue 39). A folder of the
+release before the store (its files, no run.db) is checked file by file before it is imported;
+one with a store is checked against it. The untouched folders still resume."""
 
 from __future__ import annotations
 
@@ -26,6 +27,15 @@ def finished(tmp_path_factory: pytest.TempPathFactory) -> Path:
         "--shape", "2x2x2", "--duration", "0.6", "--out", str(out),
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
+    return out
+
+
+@pytest.fixture(scope="module")
+def before_the_store(finished: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The same run as the release before the store left it: its files alone."""
+    out = tmp_path_factory.mktemp("old") / "run"
+    shutil.copytree(finished, out)
+    (out / "run.db").unlink()
     return out
 
 
@@ -97,10 +107,10 @@ CASES: dict[str, tuple[Callable[[Files], None] | tuple[str, str], str]] = {
 
 @pytest.mark.parametrize("case", list(CASES))
 def test_a_tampered_folder_is_refused_in_one_line(
-    finished: Path, tmp_path: Path, case: str
+    before_the_store: Path, tmp_path: Path, case: str
 ) -> None:
     folder = tmp_path / "run"
-    shutil.copytree(finished, folder)
+    shutil.copytree(before_the_store, folder)
     change, words = CASES[case]
     if isinstance(change, tuple):
         (folder / change[0]).write_text(change[1])
@@ -117,14 +127,42 @@ def test_a_tampered_folder_is_refused_in_one_line(
     assert len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
     assert "--resume" in lines[0] and words in lines[0], lines[0]
     assert (folder / "population.csv").read_bytes() == before  # nothing written
+    assert not (folder / "run.db").exists()
 
 
-def test_the_untouched_folder_resumes(finished: Path, tmp_path: Path) -> None:
+@pytest.mark.parametrize(
+    ("change", "words"),
+    [
+        (("config.json", '{"preset": "quick"}'), "config.json: not the config of the run"),
+        (("run.db", "not a database " * 100), "run.db: not a `softevo run` store"),
+    ],
+    ids=["config.json edited", "run.db garbled"],
+)
+def test_a_folder_at_odds_with_its_store_is_refused_in_one_line(
+    finished: Path, tmp_path: Path, change: tuple[str, str], words: str
+) -> None:
     folder = tmp_path / "run"
     shutil.copytree(finished, folder)
+    (folder / change[0]).write_text(change[1])
+    before = (folder / "population.csv").read_bytes()
+    done = softevo("run", "--resume", str(folder), "--generations", "3")
+    assert done.returncode == 2, (done.returncode, done.stderr)
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
+    assert lines[0].startswith(f"softevo run: error: --resume {folder}") and words in lines[0]
+    assert (folder / "population.csv").read_bytes() == before  # nothing written
+
+
+@pytest.mark.parametrize("kind", ["finished", "before_the_store"])
+def test_the_untouched_folders_resume_to_the_same_files(
+    request: pytest.FixtureRequest, tmp_path: Path, kind: str
+) -> None:
+    folder = tmp_path / "run"
+    shutil.copytree(request.getfixturevalue(kind), folder)
     done = softevo("run", "--resume", str(folder), "--generations", "3")
     assert done.returncode == 0, done.stderr
     assert json.loads((folder / "state.json").read_text())["generation"] == 3
+    assert (folder / "run.db").is_file()
 
 
 def test_a_file_instead_of_a_folder_is_refused_in_one_line(finished: Path) -> None:

@@ -9,12 +9,9 @@ import csv
 import json
 from pathlib import Path
 
-from softevo import library
+from softevo import library, run_store
 from softevo.core.config import resolve
-from softevo.core.nulls import to_null
-from softevo.core.physics.evaluation import SerialEvaluator
-from softevo.core.search.evolution import Evolution
-from softevo.results import POPULATION_COLUMNS, Checkpoints, read_results, read_resumable
+from softevo.results import POPULATION_COLUMNS, read_results
 from tests.softevo.inprocess import softevo
 
 SMALL = {"preset": "quick", "population": 6, "generations": 3, "seed": 4, "shape": [2, 2, 2],
@@ -57,18 +54,14 @@ def test_the_librarys_result_carries_the_records_and_the_bests() -> None:
 def test_a_folder_of_the_release_before_records_resumes_to_the_same_archive(
     tmp_path: Path,
 ) -> None:
-    whole = Evolution.start(resolve(HEADING))
-    whole.run(SerialEvaluator())
-    half = Evolution.start(resolve({**HEADING, "generations": 2}))
-    checkpoints = Checkpoints(tmp_path, half, seconds=0.0)
-    with SerialEvaluator() as evaluator:
-        while not half.done:
-            half.step(evaluator)
-            checkpoints.done()
-    checkpoints.flush()
-    # what the release before wrote: headings alone, and four population columns
-    cache = json.loads((tmp_path / "cache.json").read_text())
-    cache["heading"] = {key: to_null(r["heading"]) for key, r in half.measures.items()}
+    whole = library.evolve(HEADING, workers=1)
+    half = run_store.new(tmp_path, resolve({**HEADING, "generations": 2}))
+    run_store.drive(half, 1, 2, lambda step: None)
+    run_store.Checkpoints(half).flush()
+    half.close()
+    (tmp_path / "run.db").unlink()  # what the release before wrote: headings alone, and four
+    cache = json.loads((tmp_path / "cache.json").read_text())  # population columns
+    cache["heading"] = {key: r["heading"] for key, r in cache["measures"].items()}
     del cache["measures"]
     (tmp_path / "cache.json").write_text(json.dumps(cache))
     old_rows = [{c: row[c] for c in POPULATION_COLUMNS} for row in rows_of(tmp_path)]
@@ -77,14 +70,12 @@ def test_a_folder_of_the_release_before_records_resumes_to_the_same_archive(
         writer.writeheader()
         writer.writerows(old_rows)
 
-    resumed = read_resumable(tmp_path, HEADING["generations"])
-    assert all(set(record) == {"heading"} for record in resumed.measures.values())
-    resumed_checkpoints = Checkpoints(tmp_path, resumed, seconds=0.0)
-    with SerialEvaluator() as evaluator:
-        while not resumed.done:
-            resumed.step(evaluator)
-            resumed_checkpoints.done()
-    assert resumed.curve() == whole.curve()
-    assert resumed.state.archive.to_json() == whole.state.archive.to_json()
+    resumed = run_store.resume(tmp_path, HEADING["generations"])
+    imported = run_store.evolution(resumed)
+    assert all(set(record) == {"heading"} for record in imported.measures.values())
+    run_store.drive(resumed, 1, HEADING["generations"], lambda step: None)
+    result = library.Result.of(run_store.Checkpoints(resumed).flush())
+    assert result.curve == whole.curve
+    assert result.archive == whole.archive
     rows = rows_of(tmp_path)  # the old file goes on in its own columns
     assert tuple(rows[0]) == POPULATION_COLUMNS and len(rows) == 6 * HEADING["generations"]

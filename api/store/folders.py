@@ -1,0 +1,161 @@
+"""The store as `softevo run` keeps it: one run in a SQLite file of its output folder, driven
+by this process alone. What the service never needs lives here: which run the folder holds, a
+lease taken without waiting for the last one to expire (the process that held it stopped), more
+generations for a stopped run, its rows as population.csv lists them, and the import of a folder
+written before the store (its files become the run's rows)."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator, Mapping, Sequence
+from typing import Any
+
+from sqlalchemy import func, insert, select, update
+
+from softevo.api.db import Database, EncodedJSON
+from softevo.api.models import Generation, Individual, Run
+from softevo.api.store.driving import CURVE_FIELDS
+from softevo.api.store.runs import now
+from softevo.core.config import RunConfig
+from softevo.core.nulls import record_text, to_null
+from softevo.core.search.state import GAState
+from softevo.core.status import IndividualStatus, RunStatus
+
+#: The generation of the fitness cache an imported folder brings (its genomes' generations are
+#: not in its files): before every generation, so the run's reads count it as known.
+IMPORTED = -1
+
+
+def the_run(db: Database) -> int | None:
+    """The id of the folder's run (None: none yet)."""
+    with db.read() as session:
+        return session.scalar(select(func.min(Run.id)))
+
+
+def take(db: Database, run_id: int, owner: str, seconds: float, generations: int) -> None:
+    """Drive the run to `generations` from now on, whoever held it: a folder's run is driven by
+    the one process that opened it (the lease still fences every write, so a second one that
+    takes it stops the first)."""
+    config = db_config(db, run_id)
+    finished = totals(db, run_id)[0] >= generations
+    with db.write() as session:
+        session.execute(
+            update(Run)
+            .where(Run.id == run_id)
+            .values(status=(RunStatus.COMPLETED if finished else RunStatus.RUNNING).value,
+                    lease_owner=owner,
+                    lease_expires=now().timestamp() + seconds,
+                    config={**config, "generations": generations},
+                    generations_total=generations, error=None,
+                    finished_at=now() if finished else None)
+        )  # fmt: skip
+
+
+def release(db: Database, run_id: int, owner: str) -> None:
+    """Give the lease back (stopped or finished): the next `take` finds the run free."""
+    with db.write() as session:
+        session.execute(
+            update(Run).where(Run.id == run_id, Run.lease_owner == owner).values(lease_expires=0.0)
+        )
+
+
+def db_config(db: Database, run_id: int) -> dict[str, Any]:
+    with db.read() as session:
+        return dict(session.scalar(select(Run.config).where(Run.id == run_id)))
+
+
+def totals(db: Database, run_id: int) -> tuple[int, int, int, float]:
+    """(generations done, evaluations, saved, compute seconds) of the run."""
+    with db.read() as session:
+        row = session.execute(
+            select(Run.generations_done, Run.evaluations, Run.saved, Run.compute_seconds).where(
+                Run.id == run_id
+            )
+        ).one()
+        return row.generations_done, row.evaluations, row.saved, row.compute_seconds
+
+
+_OPTIONAL = ("coverage", "qd_score", "hypervolume", "front_size")
+
+
+def history(db: Database, run_id: int) -> list[dict[str, Any]]:
+    """The committed generations' statistics in order, every field (`GenerationStats.to_json`'s:
+    the API's curve leaves some out); a column of a kind the run has not left out."""
+    columns = [getattr(Generation, name) for name in (*CURVE_FIELDS, *_OPTIONAL)]
+    with db.read() as session:
+        rows = session.execute(
+            select(*columns).where(Generation.run_id == run_id).order_by(Generation.generation)
+        )
+        return [
+            {key: value for key, value in row._mapping.items()
+             if value is not None or key not in _OPTIONAL}
+            for row in rows
+        ]  # fmt: skip
+
+
+def population(db: Database, run_id: int, before: int, after: int = -1) -> Iterator[Any]:
+    """Rows (generation, index, fitness, operator, measures) of the generations after `after`
+    and before `before` (committed ones), in order: population.csv's rows."""
+    columns = (Individual.generation, Individual.index, Individual.fitness, Individual.operator,
+               Individual.measures)  # fmt: skip
+    with db.read() as session:
+        yield from session.execute(
+            select(*columns)
+            .where(Individual.run_id == run_id, Individual.generation > max(after, IMPORTED),
+                   Individual.generation < before)
+            .order_by(Individual.generation, Individual.index)
+        )  # fmt: skip
+
+
+def import_run(
+    db: Database,
+    config: RunConfig,
+    state: GAState,
+    known: tuple[Mapping[str, float], Mapping[str, Mapping[str, float]]],
+    elapsed: float,
+    rows: Sequence[dict[str, Any]],
+) -> int:
+    """A run from a folder written before the store: its config, GA state (the curve from its
+    history), fitness cache and measures by genome hash (`known`, rows of generation
+    `IMPORTED`) and population.csv's `rows` (generation, index, fitness, operator, measures:
+    their genomes are not in the files, so each keeps an empty one and no hash)."""
+    history = state.history
+    best = state.best
+    with db.write() as session:
+        run = Run(
+            status=RunStatus.RUNNING.value, preset=config.preset, seed=config.seed,
+            config=config.to_json(), generations_done=state.generation,
+            generations_total=config.generations, evaluations=sum(s.evaluations for s in history),
+            saved=sum(s.saved for s in history), compute_seconds=elapsed, created_at=now(),
+            started_at=now(), takeovers=0,
+            ga_state=json.loads(state.to_text(history=False, archive=False)),
+            archive=None if state.archive is None else state.archive.to_json(),
+            best_fitness=None if best is None else best[1],
+            best_generation=None if best is None else best[2],
+        )  # fmt: skip
+        session.add(run)
+        session.flush()
+        connection = session.connection()
+        if history:
+            connection.execute(
+                insert(Generation.__table__),
+                [{"run_id": run.id, **{key: stats.to_json().get(key) for key in CURVE_FIELDS},
+                  **{key: getattr(stats, key) for key in _OPTIONAL},
+                  "seconds": 0.0, "committed_at": now()} for stats in history],
+            )  # fmt: skip
+        fitness, measures = known
+        cached = [(IMPORTED, number, key, fitness[key], "imported", measures.get(key, {}))
+                  for number, key in enumerate(sorted(fitness))]  # fmt: skip
+        listed = [(row["generation"], row["index"], "", row["fitness"], row["operator"],
+                   row["measures"]) for row in rows]  # fmt: skip
+        if cached or listed:
+            connection.execute(insert(Individual.__table__), [
+                {"run_id": run.id, "generation": generation, "index": index,
+                 "genome": EncodedJSON("{}"), "genome_hash": key, "operator": operator[:32],
+                 "parents": EncodedJSON("[]"), "fitness": to_null(value),
+                 "measures": EncodedJSON(record_text(record)), "evaluated_at": now(),
+                 "status": (IndividualStatus.EVALUATED if to_null(value) is not None
+                            else IndividualStatus.FAILED).value}
+                for generation, index, key, value, operator, record in cached + listed
+            ])  # fmt: skip
+        return run.id

@@ -1,0 +1,205 @@
+"""`softevo run`'s persistence: the service's store, on SQLite in the output folder (`run.db`),
+driven by the service's `RunDriver` on the local pool. A run is then kept, cached, resumed and
+taken over by one code path, the service's; the folder's other files are written from the store,
+as the API's answers are read from it. A folder written before the store (state.json and
+cache.json, no run.db) is checked as before and imported on `--resume`."""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+from sqlalchemy.exc import SQLAlchemyError
+
+from softevo.api import store
+from softevo.api.db import Database
+from softevo.api.driver import Driving, RunDriver
+from softevo.api.faults import Faults, reason
+from softevo.api.store import folders
+from softevo.api.store.driving import Lease
+from softevo.core.config import RunConfig
+from softevo.core.limits import BATCH_SIZE, IN_FLIGHT, SAVE_SECONDS
+from softevo.core.search.evolution import Evolution
+from softevo.core.search.generation import Step
+from softevo.core.search.state import GAState
+from softevo.core.search.stats import GenerationStats
+from softevo.results import read_results, read_resumable, write_population, write_results
+from softevo.resume_checks import check_folder
+
+DATABASE = "run.db"
+#: A folder's run is driven by one process; a write renews its lease for this long (s).
+LEASE_SECONDS = 15.0
+
+
+@dataclass(frozen=True)
+class Folder:
+    """A `softevo run` output folder and the run its store holds."""
+
+    out: Path
+    db: Database
+    run_id: int
+
+    @property
+    def config(self) -> RunConfig:
+        return RunConfig.model_validate(folders.db_config(self.db, self.run_id))
+
+    def close(self) -> None:
+        """Close the store: its write-ahead log goes into run.db, one file to copy."""
+        self.db.dispose()
+
+    @property
+    def done(self) -> int:
+        """Generations committed."""
+        return folders.totals(self.db, self.run_id)[0]
+
+
+def _database(out: Path) -> Database:
+    db = Database(f"sqlite:///{out / DATABASE}")
+    db.upgrade()  # a folder of an older release: its store migrated as the service's is
+    return db
+
+
+def new(out: Path, config: RunConfig) -> Folder:
+    """A new run in `out` (a store left there by the same config's run is started afresh)."""
+    for suffix in ("", "-wal", "-shm"):
+        (out / f"{DATABASE}{suffix}").unlink(missing_ok=True)
+    db = _database(out)
+    return Folder(out, db, store.create_run(db, config).id)
+
+
+def resume(out: Path, generations: int | None) -> Folder:
+    """The stopped run in `out`, to go on to `generations` if given; ValueError (or the folder
+    checks' ResumeError) with a one-line reason if it cannot."""
+    if not (out / DATABASE).is_file():
+        return _imported(out, generations)
+    try:
+        db = _database(out)
+        run_id = folders.the_run(db)
+    except SQLAlchemyError as error:  # not a database, or not softevo's
+        raise ValueError(f"{out}/{DATABASE}: not a `softevo run` store ({reason(error)})") from None
+    if run_id is None:  # stopped while importing: the files are still whole
+        db.dispose()
+        return _imported(out, generations)
+    folder = Folder(out, db, run_id)
+    stored = folders.db_config(db, run_id)
+    if (out / "config.json").is_file() and _config_json(out) != stored:
+        raise ValueError(
+            f"{out}/config.json: not the config of the run in {DATABASE} (edited, or another "
+            "run's); cannot resume"
+        )
+    if generations is not None and generations < folder.done:
+        raise ValueError(
+            f"--generations {generations}: the run already has {folder.done} generations"
+        )
+    return folder
+
+
+def _config_json(out: Path) -> object:
+    try:
+        return json.loads((out / "config.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+
+
+def _imported(out: Path, generations: int | None) -> Folder:
+    """A folder of a release before the store: checked, then its files become the run's rows."""
+    check_folder(out, generations)
+    evolution = read_resumable(out, generations)
+    _, _, rows = read_results(out)
+    for suffix in ("", "-wal", "-shm"):
+        (out / f"{DATABASE}{suffix}").unlink(missing_ok=True)
+    db = _database(out)
+    known = (evolution.cache, evolution.measures)
+    run_id = folders.import_run(
+        db, evolution.config, evolution.state, known, evolution.elapsed, rows
+    )
+    return Folder(out, db, run_id)
+
+
+def evolution(folder: Folder) -> Evolution:
+    """The run as its store holds it, as an in-process run would hold it: what `Result` and the
+    folder's files are made of."""
+    stored_config, stored_state = store.driving.load(folder.db, folder.run_id)
+    config = RunConfig.model_validate(stored_config)
+    if stored_state is None:
+        return Evolution.start(config)
+    done, _, _, seconds = folders.totals(folder.db, folder.run_id)
+    cache, measures = store.driving.known_fitness(folder.db, folder.run_id, done)
+    cache.pop("", None)  # an imported folder's individuals: no genome, no hash
+    measures.pop("", None)
+    history = [GenerationStats.from_json(row) for row in folders.history(folder.db, folder.run_id)]
+    state = replace(GAState.from_json(stored_state), history=history)
+    return Evolution.resume(config, state, cache, seconds, measures)
+
+
+class _Driver(RunDriver):
+    """The service's driver, telling `softevo run` of each generation committed."""
+
+    def __init__(self, driving: Driving, run_id: int, report: Callable[[Step], None]) -> None:
+        super().__init__(driving, run_id)
+        self.report = report
+
+    def committed(self, step: Step) -> None:
+        self.report(step)
+
+
+def drive(
+    folder: Folder,
+    workers: int | None,
+    generations: int,
+    report: Callable[[Step], None],
+) -> None:
+    """Run the folder's run to `generations` on `workers` local processes, calling `report`
+    after each generation is committed. Ctrl-C keeps the fitness that landed, then raises."""
+    from softevo.core.physics.evaluation import make_evaluator  # the physics: loaded to run
+
+    owner = f"softevo-run:{socket.gethostname()}:{os.getpid()}"
+    folders.take(folder.db, folder.run_id, owner, LEASE_SECONDS, generations)
+    evaluator = make_evaluator(workers)
+    lease = Lease(owner, LEASE_SECONDS)
+    driving = Driving(folder.db, evaluator, lease, BATCH_SIZE, IN_FLIGHT, SAVE_SECONDS,
+                      threading.Event(), Faults())  # fmt: skip
+    driver = _Driver(driving, folder.run_id, report)
+    try:
+        driver.drive()
+    except KeyboardInterrupt:
+        driver.flush()  # what landed of the generation: not simulated again on --resume
+        raise
+    finally:
+        folders.release(folder.db, folder.run_id, owner)
+        evaluator.close()
+
+
+class Checkpoints:
+    """The folder's files, written from the store at most every `seconds` while the run goes
+    (rewriting them after every generation would cost time that grows with the run), and at its
+    end or interruption (`flush`). population.csv only gets the generations it lacks."""
+
+    def __init__(self, folder: Folder, seconds: float = SAVE_SECONDS) -> None:
+        self.folder, self.seconds = folder, seconds
+        self.written = time.monotonic()
+        self.listed: int | None = None  # generations population.csv holds (None: rewrite it)
+
+    def done(self) -> None:
+        if time.monotonic() - self.written >= self.seconds:
+            self.flush()
+
+    def flush(self) -> Evolution:
+        """Write every file; the run as written."""
+        evolution_now = evolution(self.folder)
+        write_results(self.folder.out, evolution_now)
+        done = len(evolution_now.state.history)
+        rows = folders.population(self.folder.db, self.folder.run_id, done, _last(self.listed))
+        write_population(self.folder.out, rows, append=self.listed is not None)
+        self.listed, self.written = done, time.monotonic()
+        return evolution_now
+
+
+def _last(listed: int | None) -> int:
+    return -1 if listed is None else listed - 1
