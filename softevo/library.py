@@ -1,6 +1,7 @@
 """The engine in your own process (a notebook, a script): evolve a run whole or generation by
-generation, simulate a robot file. `softevo run` and `softevo simulate` are this module plus
-files and printing, so what it returns is what they write (docs/python.md).
+generation, simulate a robot file. It keeps nothing, so it holds the run in memory; `softevo run`
+drives the same generation step through the service's store (`softevo.run_store`) and prints this
+module's `Result`, and `softevo simulate` is this module plus printing (docs/python.md).
 
 Bad input raises a `ValueError` whose one-line message names the field: `ConfigError` for a run
 config, `RobotFileError` for a robot file or the simulation settings given with it, a plain

@@ -1,15 +1,16 @@
-"""The files `softevo run` leaves in its output folder, rewritten at least every second
+"""The files `softevo run` leaves in its output folder besides `run.db` (the run in the
+service's store, `softevo.run_store`), written from the store at least every second
 (`SAVE_SECONDS`, the service's bound too) and when the run ends or is interrupted, so an
-interrupted run still has its partial results (population.csv gets each generation as it ends):
+interrupted run still has its partial results:
 
+    run.db            the run as the service stores one (SQLite): what `--resume` goes on from
     config.json       the resolved run configuration (preset merged with overrides)
     curve.csv         one row per generation (the learning curve)
     curve.json        {"run": config, "generations": [rows]}, the same as `softevo run --json`
     best_robot.json   the fastest robot so far, a softevo.robot/1 file
-    state.json        the genetic algorithm's state (JSON), for inspection or resuming
+    state.json        the genetic algorithm's state (JSON), for inspection
     cache.json        the fitness of every genome simulated so far (by genome hash), their
-                      records of measures (`measures`: name -> value) and the wall time, with
-                      state.json what `softevo run --resume DIR` goes on from
+                      records of measures (`measures`: name -> value) and the wall time
     population.csv    every individual: generation, index, fitness (empty: failed), operator,
                       then its measures, one column each (docs/physics.md; empty: not measured)
     curve.png, population.png, diversity.png   the run's figures, written at the end
@@ -18,6 +19,9 @@ interrupted run still has its partial results (population.csv gets each generati
     front.csv, front.png    a run with objectives: the non-dominated set of every individual
                       evaluated (population.csv's columns), and every robot as a dot with the
                       front drawn over them
+
+A folder written before run.db (state.json and cache.json were what `--resume` went on from) is
+read here (`read_resumable`) to be imported into a store.
 """
 
 from __future__ import annotations
@@ -40,7 +44,7 @@ from softevo.core.search.stats import curve_columns
 from softevo.library import Result
 
 
-def _write_json(path: Path, data: Any, indent: int | None = 1) -> None:
+def write_json(path: Path, data: Any, indent: int | None = 1) -> None:
     """Write atomically (temp file + rename) so a crash never leaves half a file."""
     temporary = path.with_suffix(path.suffix + ".tmp")
     text = json.dumps(data, indent=indent, allow_nan=False)
@@ -51,10 +55,10 @@ def _write_json(path: Path, data: Any, indent: int | None = 1) -> None:
 def write_results(out: Path, evolution: Evolution) -> None:
     out.mkdir(parents=True, exist_ok=True)
     result = Result.of(evolution)
-    _write_json(out / "config.json", result.config)
-    _write_json(out / "curve.json", {"run": result.config, "generations": result.curve})
-    _write_json(out / "state.json", result.state)
-    _write_json(  # one line, by the C encoder: every genome's record, rewritten every second
+    write_json(out / "config.json", result.config)
+    write_json(out / "curve.json", {"run": result.config, "generations": result.curve})
+    write_json(out / "state.json", result.state)
+    write_json(  # one line, by the C encoder: every genome's record, rewritten every second
         out / "cache.json",
         {
             "generation": evolution.state.generation,  # of state.json, checked on resuming
@@ -65,7 +69,7 @@ def write_results(out: Path, evolution: Evolution) -> None:
         indent=None,
     )
     if result.best is not None:
-        _write_json(out / "best_robot.json", result.best)
+        write_json(out / "best_robot.json", result.best)
     temporary = out / "curve.csv.tmp"
     with temporary.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle, lineterminator="\n")
@@ -195,7 +199,7 @@ def write_archive(out: Path, evolution: Evolution) -> dict[str, Any] | None:
     if archive is None:
         return None
     data = archive.to_json()
-    _write_json(out / "archive.json", data)
+    write_json(out / "archive.json", data)
     temporary = out / "archive.csv.tmp"
     with temporary.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle, lineterminator="\n")

@@ -30,7 +30,8 @@ from softevo.run_store import Checkpoints, Folder
 
 DESCRIPTION = (
     "Evolve robots in this process with a live progress bar. While it runs (at least "
-    "every second, and when it ends or is stopped) the output folder gets config.json, "
+    "every second, and when it ends or is stopped) the output folder gets run.db (the run "
+    "in the service's store, what --resume goes on from), and from it config.json, "
     "curve.csv, curve.json, best_robot.json, "
     "state.json, cache.json and population.csv, and at the end curve.png, "
     "population.png and diversity.png; Ctrl-C stops, keeps them and draws the figures "
@@ -87,8 +88,9 @@ def add_parser(commands: Any) -> None:
     )  # fmt: skip
     run.add_argument(
         "--resume", metavar="DIR",
-        help="go on with the stopped run in DIR (its config.json, state.json, cache.json), "
-        "writing there; only --generations, --workers and --json may be given with it",
+        help="go on with the stopped run in DIR (its run.db; a folder of a release before "
+        "run.db is imported from its config.json, state.json and cache.json), writing there; "
+        "only --generations, --workers and --json may be given with it",
     )  # fmt: skip
     run.add_argument("--json", action="store_true", help="print the result as JSON at the end")
     run.set_defaults(handler=run_command)

@@ -29,7 +29,13 @@ from softevo.core.search.evolution import Evolution
 from softevo.core.search.generation import Step
 from softevo.core.search.state import GAState
 from softevo.core.search.stats import GenerationStats
-from softevo.results import read_results, read_resumable, write_population, write_results
+from softevo.results import (
+    read_results,
+    read_resumable,
+    write_json,
+    write_population,
+    write_results,
+)
 from softevo.resume_checks import check_folder
 
 DATABASE = "run.db"
@@ -70,7 +76,9 @@ def new(out: Path, config: RunConfig) -> Folder:
     for suffix in ("", "-wal", "-shm"):
         (out / f"{DATABASE}{suffix}").unlink(missing_ok=True)
     db = _database(out)
-    return Folder(out, db, store.create_run(db, config).id)
+    folder = Folder(out, db, store.create_run(db, config).id)
+    write_json(out / "config.json", config.to_json())  # the folder names its config at once
+    return folder
 
 
 def resume(out: Path, generations: int | None) -> Folder:

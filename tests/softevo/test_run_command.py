@@ -7,6 +7,7 @@ import csv
 import json
 import os
 import signal
+import sqlite3
 import subprocess
 import sys
 import time
@@ -170,3 +171,39 @@ def test_resume_goes_on_to_the_curve_of_an_uninterrupted_run(tmp_path: Path) -> 
     assert again.returncode == 2 and "drop --shape" in again.stderr
     nothing = softevo("run", "--resume", str(tmp_path / "nowhere"))
     assert nothing.returncode == 2 and "not a resumable" in nothing.stderr
+
+
+def _committed(store: Path) -> int:
+    """Generations run.db holds committed (0 while it is being made)."""
+    try:
+        with sqlite3.connect(f"file:{store}?mode=ro", uri=True, timeout=5) as connection:
+            row = connection.execute("SELECT max(generations_done) FROM runs").fetchone()
+    except sqlite3.Error:
+        return 0
+    return row[0] or 0
+
+
+def test_sigkill_then_resume_takes_the_run_over_to_the_uninterrupted_curve(
+    tmp_path: Path,
+) -> None:
+    """No chance to save anything: `--resume` takes the run over from run.db as a restarted
+    service takes over a run whose driver died (the same code)."""
+    whole, killed = tmp_path / "whole", tmp_path / "killed"
+    run = ("run", *SMALL, "--shape", "2x2x2", "--seed", "4", "--generations", "20")
+    assert softevo(*run, "--out", str(whole)).returncode == 0
+    command = [sys.executable, "-P", "-m", "softevo.cli", *run, "--out", str(killed)]
+    process = subprocess.Popen(
+        command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True
+    )
+    started = time.monotonic()
+    while _committed(killed / "run.db") < 2 and time.monotonic() < started + 120:
+        time.sleep(0.05)
+    os.killpg(process.pid, signal.SIGKILL)
+    process.communicate(timeout=60)
+    done = _committed(killed / "run.db")
+    assert 2 <= done < 20, done
+    resumed = softevo("run", "--resume", str(killed), "--json")
+    assert resumed.returncode == 0, resumed.stderr
+    expected = json.loads((whole / "curve.json").read_text())["generations"]
+    assert json.loads(resumed.stdout)["generations"] == expected
+    assert (killed / "population.csv").read_text() == (whole / "population.csv").read_text()
