@@ -12,7 +12,7 @@ import socket
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from sqlalchemy.exc import SQLAlchemyError
@@ -130,20 +130,39 @@ def _imported(out: Path, generations: int | None) -> Folder:
     return Folder(out, db, run_id)
 
 
-def evolution(folder: Folder) -> Evolution:
+@dataclass
+class Known:
+    """The fitness and records of the generations before `before`, read from the store once:
+    committed rows never change, so each later read takes the generations since."""
+
+    fitness: dict[str, float] = field(default_factory=dict)
+    measures: dict[str, dict[str, float]] = field(default_factory=dict)
+    before: int | None = None
+
+    def update(self, folder: Folder, before: int) -> None:
+        fitness, measures = store.driving.known_fitness(
+            folder.db, folder.run_id, before, self.before
+        )
+        fitness.pop("", None)  # an imported folder's individuals: no genome, no hash
+        measures.pop("", None)
+        self.fitness.update(fitness)
+        self.measures.update(measures)
+        self.before = before
+
+
+def evolution(folder: Folder, known: Known | None = None) -> Evolution:
     """The run as its store holds it, as an in-process run would hold it: what `Result` and the
-    folder's files are made of."""
+    folder's files are made of (`known`: what an earlier call read)."""
     stored_config, stored_state = store.driving.load(folder.db, folder.run_id)
     config = RunConfig.model_validate(stored_config)
     if stored_state is None:
         return Evolution.start(config)
     done, _, _, seconds = folders.totals(folder.db, folder.run_id)
-    cache, measures = store.driving.known_fitness(folder.db, folder.run_id, done)
-    cache.pop("", None)  # an imported folder's individuals: no genome, no hash
-    measures.pop("", None)
+    known = Known() if known is None else known
+    known.update(folder, done)
     history = [GenerationStats.from_json(row) for row in folders.history(folder.db, folder.run_id)]
     state = replace(GAState.from_json(stored_state), history=history)
-    return Evolution.resume(config, state, cache, seconds, measures)
+    return Evolution.resume(config, state, known.fitness, seconds, known.measures)
 
 
 class _Driver(RunDriver):
@@ -193,6 +212,7 @@ class Checkpoints:
         self.folder, self.seconds = folder, seconds
         self.written = time.monotonic()
         self.listed: int | None = None  # generations population.csv holds (None: rewrite it)
+        self.known = Known()
 
     def done(self) -> None:
         if time.monotonic() - self.written >= self.seconds:
@@ -200,7 +220,7 @@ class Checkpoints:
 
     def flush(self) -> Evolution:
         """Write every file; the run as written."""
-        evolution_now = evolution(self.folder)
+        evolution_now = evolution(self.folder, self.known)
         write_results(self.folder.out, evolution_now)
         done = len(evolution_now.state.history)
         rows = folders.population(self.folder.db, self.folder.run_id, done, _last(self.listed))

@@ -67,18 +67,18 @@ def load(db: Database, run_id: int) -> tuple[dict[str, Any], dict[str, Any] | No
 
 
 def known_fitness(
-    db: Database, run_id: int, before: int
+    db: Database, run_id: int, before: int, since: int | None = None
 ) -> tuple[dict[str, float], dict[str, dict[str, float]]]:
-    """Fitness (NaN = failed) of every genome evaluated in generations before `before`, and
-    their records of measures (NaN = not measured; rows upgraded from before revision 0004 hold
-    the fitness's measure and the heading), by genome hash."""
+    """Fitness (NaN = failed) of every genome evaluated in generations before `before` (and
+    from `since` on, if given), and their records of measures (NaN = not measured; rows upgraded
+    from before revision 0004 hold the fitness's measure and the heading), by genome hash."""
+    where = [Individual.run_id == run_id, Individual.generation < before,
+             Individual.status != IndividualStatus.PENDING]  # fmt: skip
+    if since is not None:
+        where.append(Individual.generation >= since)
     with db.read() as session:
         rows = session.execute(
-            select(Individual.genome_hash, Individual.fitness, Individual.measures).where(
-                Individual.run_id == run_id,
-                Individual.generation < before,
-                Individual.status != IndividualStatus.PENDING,
-            )
+            select(Individual.genome_hash, Individual.fitness, Individual.measures).where(*where)
         ).all()
         fitness = {genome_hash: from_null(value) for genome_hash, value, _ in rows}
         return fitness, {genome_hash: from_null_record(record) for genome_hash, _, record in rows}
