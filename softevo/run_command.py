@@ -8,13 +8,11 @@ import json
 import math
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-from softevo import run_store
-from softevo.api.store import folders
 from softevo.core.config import PRESET_DESCRIPTIONS, PRESETS, ConfigError, RunConfig, resolve
 from softevo.core.objectives import OBJECTIVES
 from softevo.core.outputs import figures
@@ -26,7 +24,9 @@ from softevo.core.search.generation import Step
 from softevo.library import Result
 from softevo.results import read_results, write_archive, write_front
 from softevo.resume_checks import ResumeError
-from softevo.run_store import Checkpoints, Folder
+
+if TYPE_CHECKING:  # the store (SQLAlchemy) is imported by `softevo run` alone, when it runs
+    from softevo.run_store import Checkpoints, Folder
 
 DESCRIPTION = (
     "Evolve robots in this process with a live progress bar. While it runs (at least "
@@ -223,6 +223,8 @@ def _not_anothers(args: argparse.Namespace, out: Path, config: RunConfig) -> Non
 
 def _folder(args: argparse.Namespace) -> Folder:
     """The run to do and its folder: a new one, or (--resume) a stopped one."""
+    from softevo import run_store
+
     if args.resume is not None:
         given = [f"--{name}" for name in _CONFIG_FLAGS if getattr(args, name) is not None]
         if args.out is not None:
@@ -285,6 +287,8 @@ def run_command(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace, folder: Folder) -> int:
     out, config = folder.out, folder.config
     generations = args.generations if args.resume and args.generations else config.generations
+    from softevo.run_store import Checkpoints
+
     checkpoints = Checkpoints(folder)
     try:
         with Progress(*_columns(config), console=Console(stderr=True), transient=args.json) as bar:
@@ -324,7 +328,9 @@ def _drive(
     folder: Folder, workers: int | None, generations: int, checkpoints: Checkpoints, bar: Progress
 ) -> None:
     """The run to its end through the store, the bar and the files following each generation."""
-    done, evaluations, _, elapsed = folders.totals(folder.db, folder.run_id)
+    from softevo import run_store
+
+    done, evaluations, _, elapsed = folder.totals()
     task = bar.add_task("run", total=generations, completed=done, best="-", rate="-")
     counted = {"evaluations": evaluations, "elapsed": elapsed}
 

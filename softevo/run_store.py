@@ -62,7 +62,11 @@ class Folder:
     @property
     def done(self) -> int:
         """Generations committed."""
-        return folders.totals(self.db, self.run_id)[0]
+        return self.totals()[0]
+
+    def totals(self) -> tuple[int, int, int, float]:
+        """(generations done, evaluations, saved, compute seconds) of the run."""
+        return folders.totals(self.db, self.run_id)
 
 
 def _database(out: Path) -> Database:
