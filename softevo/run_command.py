@@ -278,8 +278,19 @@ def run_command(args: argparse.Namespace) -> int:
     if args.workers is not None and args.workers < 1:
         args.parser.error(f"--workers must be >= 1, got {args.workers}")
     folder = _folder(args)
+    from sqlalchemy.exc import SQLAlchemyError
+
+    from softevo.api.faults import reason
+
     try:
         return _run(args, folder)
+    except (SQLAlchemyError, OSError) as error:  # a full disk, a folder gone read-only
+        print(
+            f"softevo run: error: {folder.out}: cannot write ({reason(error)}); what was "
+            f"committed is kept: softevo run --resume {folder.out}",
+            file=sys.stderr,
+        )
+        return 1
     finally:
         folder.close()
 

@@ -14,6 +14,10 @@ import time
 from pathlib import Path
 from xml.etree import ElementTree
 
+import pytest
+from sqlalchemy.exc import OperationalError
+
+from softevo.api.store import driving
 from softevo.core.robots.robot_file import load_robot
 from tests.softevo.inprocess import softevo
 
@@ -207,3 +211,22 @@ def test_sigkill_then_resume_takes_the_run_over_to_the_uninterrupted_curve(
     expected = json.loads((whole / "curve.json").read_text())["generations"]
     assert json.loads(resumed.stdout)["generations"] == expected
     assert (killed / "population.csv").read_text() == (whole / "population.csv").read_text()
+
+
+def test_a_store_that_cannot_write_is_said_in_one_line(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    out = tmp_path / "full"
+
+    def full(*args: object) -> None:
+        raise OperationalError("INSERT", {}, sqlite3.OperationalError("database or disk is full"))
+
+    monkeypatch.setattr(driving, "commit_generation", full)
+    done = softevo("run", *SMALL, "--shape", "2x2x2", "--generations", "2", "--out", str(out))
+    assert done.returncode == 1 and "Traceback" not in done.stderr
+    said = done.stderr.strip().splitlines()[-1]
+    assert said == (f"softevo run: error: {out}: cannot write (database or disk is full); what "
+                    f"was committed is kept: softevo run --resume {out}")  # fmt: skip
+    monkeypatch.undo()
+    resumed = softevo("run", "--resume", str(out), "--json")
+    assert resumed.returncode == 0 and len(json.loads(resumed.stdout)["generations"]) == 2
