@@ -99,8 +99,8 @@ def resume(out: Path, generations: int | None) -> Folder:
         db.dispose()
         return _imported(out, generations)
     folder = Folder(out, db, run_id)
-    stored = folders.db_config(db, run_id)
-    if (out / "config.json").is_file() and _config_json(out) != stored:
+    stored = _but_generations(folders.db_config(db, run_id))  # which a --resume may raise
+    if (out / "config.json").is_file() and _but_generations(_config_json(out)) != stored:
         raise ValueError(
             f"{out}/config.json: not the config of the run in {DATABASE} (edited, or another "
             "run's); cannot resume"
@@ -117,6 +117,14 @@ def _config_json(out: Path) -> object:
         return json.loads((out / "config.json").read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
+
+
+def _but_generations(config: object) -> object:
+    return (
+        {k: v for k, v in config.items() if k != "generations"}
+        if isinstance(config, dict)
+        else config
+    )
 
 
 def _imported(out: Path, generations: int | None) -> Folder:

@@ -124,3 +124,20 @@ def test_a_folder_from_before_the_store_is_imported_and_goes_on(tmp_path: Path) 
     same(finish(old, config.generations), whole)
     for name in ("population.csv", "curve.csv", "curve.json", "best_robot.json", "state.json"):
         assert (old / name).read_bytes() == (whole_out / name).read_bytes(), name
+
+
+def test_a_run_stopped_before_its_raised_generations_were_written_still_resumes(
+    tmp_path: Path,
+) -> None:
+    """`--resume --generations G` raises the stored config's G at once; killed before the files
+    were rewritten, config.json still says the old G, and the folder is not refused for it."""
+    config = resolve({**CONFIG, "generations": 2})
+    folder = run_store.new(tmp_path, config)
+    run_store.drive(folder, 1, 2, lambda step: None)
+    folders.take(folder.db, folder.run_id, "killed", 15.0, 3)  # then SIGKILL: no write after
+    assert json.loads((tmp_path / "config.json").read_text())["generations"] == 2
+    resumed = run_store.resume(tmp_path, None)
+    assert resumed.config.generations == 3
+    (tmp_path / "config.json").write_text(json.dumps({**config.to_json(), "seed": 4}))
+    with pytest.raises(ValueError, match=r"config\.json: not the config of the run"):
+        run_store.resume(tmp_path, None)
