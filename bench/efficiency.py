@@ -6,8 +6,9 @@ for exactly the robots that path simulated (the same robot files, re-simulated h
 batches, `simulate_batch(..., threads=cores)`, in this one process), and their ratio bound /
 wall (1.0: nothing but simulation). Paths:
 
-* `run`: `softevo run` in process (`Evolution` and the local pool on every core), the robots
-  recorded as they are evaluated;
+* `run`: in process, the library's path (`Evolution` and the local pool on every core; `softevo
+  run` drives the same step through its store, 1.04x the wall of a paper-voxel run, BENCHMARKS.md),
+  the robots recorded as they are evaluated;
 * `service`: a real `softevo serve` on SQLite with its local pool, the run or sweep sent over
   HTTP and timed from the request to its last run completed; the robots read back from the
   database (every individual that was simulated, not those from the cache);
@@ -122,7 +123,7 @@ Files = list[dict[str, Any]]
 
 
 def through_run(requests: list[dict[str, Any]]) -> tuple[float, list[Files]]:
-    """`softevo run`'s path: each run in this process, one after another, on the local pool."""
+    """The library's path: each run in this process, one after another, on the local pool."""
     with PoolEvaluator() as pool:
         Evolution.start(resolve({"preset": "quick", "generations": 2})).run(pool)  # warm
         recording = Recording(pool)

@@ -18,10 +18,10 @@
   first curve), so that a machine shared with others loads both alike: the wall times are
   compared in those pairs.
 * **No evaluation-time bias.** One matched run again in this process (`Evolution` on the local
-  pool, the code path of `softevo run`), twice: as it is, and through `SizeTimed`, which holds
-  each batch k s per voxel of its robots before it returns the real fitness, so small robots
-  land first and batches overtake each other. Both curves and final states are compared, and
-  the curve with the service's.
+  pool, the library's code path: the one generation step, the run held in memory), twice: as
+  it is, and through `SizeTimed`, which holds each batch k s per voxel of its robots before it
+  returns the real fitness, so small robots land first and batches overtake each other. Both
+  curves and final states are compared, and the curve with the service's.
 
 The tables and the figure are `steady_report`'s.
 """
