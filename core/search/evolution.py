@@ -1,7 +1,9 @@
-"""A whole evolution run in one process (`softevo run`): the generation step of
+"""A whole evolution run in one process (the library): the generation step of
 `softevo.core.search.generation`, generation after generation, with the state held in memory.
 
-The service's coordinator runs the same step with persistence around it. Genomes already
+The service's driver runs the same step with persistence around it, for the service and for
+`softevo run` (its store in the output folder); a run held here is also how the folder's files
+and `Result` see a stored run. Genomes already
 evaluated in this run (survivors, duplicates) are not simulated again: the run has one simulation
 setting, so a genome's hash identifies its fitness.
 """
