@@ -1,14 +1,15 @@
 """One generation step, the only one: ask -> split the generation into genomes whose fitness is
 known and new ones -> evaluate the new ones in batches, several in flight -> tell.
 
-The library (`softevo.core.search.evolution`) and the service's driver (for the service and
-for `softevo run`) both run it; the driver adds persistence through `Hooks`, never a second copy of the loop, so an algorithm
-plugs in once and runs everywhere. Counting is the same for both: a genome seen in an earlier
-generation of the run is not simulated again (`saved`); within a generation, each distinct new
-genome is simulated once (`evaluations`), and one whose fitness a hook already holds (saved
-before a crash) is counted as evaluated but not simulated again. A streaming strategy
-(`steady-state`) is told one birth at a time instead, its births streamed to the evaluator
-(`softevo.core.search.stream`); its step still ends with one curve row, through the same hooks.
+The library (`softevo.core.search.evolution`) and the service's driver (for the service and for
+`softevo run`) both run it; the driver adds persistence through `Hooks`, never a second copy of
+the loop, so an algorithm plugs in once and runs everywhere. Counting is the same for both: a
+genome seen in an earlier generation of the run is not simulated again (`saved`); within a
+generation, each distinct new genome is simulated once (`evaluations`), and one whose fitness a
+hook already holds (saved before a crash) is counted as evaluated but not simulated again. A
+streaming strategy (`steady-state`) is told one birth at a time instead, its births streamed to
+the evaluator (`softevo.core.search.stream`); its step still ends with one curve row, through
+the same hooks.
 """
 
 from __future__ import annotations
