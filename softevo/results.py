@@ -1,7 +1,7 @@
 """The files `softevo run` leaves in its output folder besides `run.db` (the run in the
-service's store, `softevo.run_store`), written from the store at least every second
-(`SAVE_SECONDS`, the service's bound too) and when the run ends or is interrupted, so an
-interrupted run still has its partial results:
+service's store, `softevo.run_store`), written from the store after a generation once a second
+has passed since the last write (`SAVE_SECONDS`, the service's bound too) and when the run ends
+or is interrupted, so an interrupted run still has its partial results:
 
     run.db            the run as the service stores one (SQLite): what `--resume` goes on from
     config.json       the resolved run configuration (preset merged with overrides)
@@ -37,6 +37,9 @@ from typing import Any
 
 from softevo.core.config import ConfigError, resolve
 from softevo.core.nulls import from_null, from_null_record, to_null
+from softevo.core.outputs import figures
+from softevo.core.outputs.archive_figures import archive_figure
+from softevo.core.outputs.front_figure import front_figure
 from softevo.core.search.algorithm import GAState
 from softevo.core.search.evolution import Evolution
 from softevo.core.search.front import front_rows
@@ -154,25 +157,34 @@ def read_results(folder: Path) -> tuple[dict[str, Any], list[dict[str, Any]], li
         curve = json.loads((folder / "curve.json").read_text(encoding="utf-8"))
     except (OSError, ValueError) as error:
         raise ValueError(f"{folder}: no readable curve.json ({error})") from None
+    return curve.get("run", {}), curve.get("generations", []), read_population(folder)
+
+
+def read_population(folder: Path) -> list[dict[str, Any]]:
+    """population.csv's individuals (none if there is no file); its `measures` are the measure
+    columns (None: empty). KeyError, TypeError or ValueError for a file that is not one."""
     individuals: list[dict[str, Any]] = []
     population = folder / "population.csv"
-    if population.exists():
-        with population.open(newline="", encoding="utf-8") as handle:
-            for row in csv.DictReader(handle):
-                individuals.append(
-                    {
-                        "generation": int(row["generation"]),
-                        "index": int(row["index"]),
-                        "fitness": float(row["fitness"]) if row["fitness"] else None,
-                        "operator": row["operator"],
-                        "measures": {
-                            name: float(value) if value else None
-                            for name, value in row.items()
-                            if name not in POPULATION_COLUMNS
-                        },
-                    }
-                )
-    return curve.get("run", {}), curve.get("generations", []), individuals
+    if not population.exists():
+        return individuals
+    with population.open(newline="", encoding="utf-8") as handle:
+        for row in csv.DictReader(handle):
+            if None in row:
+                raise ValueError(f"row {len(individuals) + 1} has more cells than the header")
+            individuals.append(
+                {
+                    "generation": int(row["generation"]),
+                    "index": int(row["index"]),
+                    "fitness": float(row["fitness"]) if row["fitness"] else None,
+                    "operator": row["operator"],
+                    "measures": {
+                        name: float(value) if value else None
+                        for name, value in row.items()
+                        if name not in POPULATION_COLUMNS
+                    },
+                }
+            )
+    return individuals
 
 
 def write_front(out: Path, individuals: list[dict[str, Any]], specs: Any) -> list[dict[str, Any]]:
@@ -265,3 +277,23 @@ def _trim_population(folder: Path, generations: int) -> None:
     kept = [rows[0], *(row for row in rows[1:] if int(row[0]) < generations)] if rows else []
     with path.open("w", newline="", encoding="utf-8") as handle:
         csv.writer(handle, lineterminator="\n").writerows(kept)
+
+
+def write_figures(out: Path, evolution: Evolution) -> None:
+    """curve.png, population.png, diversity.png of the generations finished so far, and for a
+    run with descriptors archive.json, archive.csv and the archive.png heat map."""
+    _, curve, individuals = read_results(out)
+    as_stored = evolution.config.to_json()
+    figures.run_figures(
+        curve, individuals, out, figures.run_title(as_stored), figures.fitness_label(as_stored)
+    )
+    specs = evolution.config.objectives
+    if specs:
+        write_front(out, individuals, specs)
+        title = f"Pareto front: {figures.run_title(as_stored)}"
+        figures.save(front_figure(specs, individuals, title), out / "front.png")
+    archive = write_archive(out, evolution)
+    if archive is not None:
+        title = f"MAP-Elites archive: {figures.run_title(as_stored)}"
+        figure = archive_figure(archive, title, figures.fitness_label(as_stored))
+        figures.save(figure, out / "archive.png")

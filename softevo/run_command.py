@@ -15,14 +15,10 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from softevo.core.config import PRESET_DESCRIPTIONS, PRESETS, ConfigError, RunConfig, resolve
 from softevo.core.objectives import OBJECTIVES
-from softevo.core.outputs import figures
-from softevo.core.outputs.archive_figures import archive_figure
-from softevo.core.outputs.front_figure import front_figure
 from softevo.core.search.descriptors import CATALOGUE
-from softevo.core.search.evolution import Evolution
 from softevo.core.search.generation import Step
 from softevo.library import Result
-from softevo.results import read_results, write_archive, write_front
+from softevo.results import write_figures
 from softevo.resume_checks import ResumeError
 
 if TYPE_CHECKING:  # the store (SQLAlchemy) is imported by `softevo run` alone, when it runs
@@ -31,7 +27,8 @@ if TYPE_CHECKING:  # the store (SQLAlchemy) is imported by `softevo run` alone, 
 DESCRIPTION = (
     "Evolve robots in this process with a live progress bar. The output folder gets run.db, "
     "the run in the service's own store (SQLite, committed every generation: what --resume "
-    "goes on from), and from it, at least every second and when the run ends or is stopped, "
+    "goes on from), and from it, after a generation once a second has passed since the last "
+    "write and when the run ends or is stopped, "
     "config.json, curve.csv, curve.json, best_robot.json, state.json, cache.json and "
     "population.csv, and at the end curve.png, population.png and diversity.png; Ctrl-C "
     "stops, keeps them and draws the figures of the generations done. The default folder is "
@@ -211,11 +208,14 @@ def default_out(config: RunConfig) -> Path:
 def _not_anothers(args: argparse.Namespace, out: Path, config: RunConfig) -> None:
     """Refuse a folder that holds the results of a different config (the same config's are
     rewritten with the same numbers: a run is deterministic in its config)."""
+    from softevo.run_store import stored_config
+
     try:
         stored = json.loads((out / "config.json").read_text(encoding="utf-8"))
     except (OSError, ValueError):
-        return
-    if stored != config.to_json():
+        stored = None
+    kept = stored_config(out)  # the run in run.db, if any: config.json may be gone
+    if any(found is not None and found != config.to_json() for found in (stored, kept)):
         args.parser.error(
             f"--out {out}: holds the results of another config; give another --out, "
             f"or --resume {out} to go on with that run"
@@ -224,6 +224,8 @@ def _not_anothers(args: argparse.Namespace, out: Path, config: RunConfig) -> Non
 
 def _folder(args: argparse.Namespace) -> Folder:
     """The run to do and its folder: a new one, or (--resume) a stopped one."""
+    from sqlalchemy.exc import SQLAlchemyError
+
     from softevo import run_store
 
     if args.resume is not None:
@@ -241,38 +243,29 @@ def _folder(args: argparse.Namespace) -> Folder:
             args.parser.error(f"--resume {folder}/{error}")
         except ValueError as error:
             args.parser.error(f"--resume {error}")
+        except (OSError, SQLAlchemyError) as error:  # a full disk while importing a folder
+            args.parser.error(f"--resume {folder}: cannot write its store ({_reason(error)})")
     try:
         config = resolve(_request(args))
     except ConfigError as error:
         args.parser.error(str(error))
     out = Path(args.out) if args.out else default_out(config)
     _not_anothers(args, out, config)
-    return run_store.new(_writable(args, out), config)
+    try:
+        return run_store.new(_writable(args, out), config)
+    except (ValueError, OSError, SQLAlchemyError) as error:
+        args.parser.error(f"--out {out}: cannot start the run's store ({_reason(error)})")
+
+
+def _reason(error: BaseException) -> str:
+    from softevo.api.faults import reason
+
+    return reason(error)
 
 
 _CONFIG_FLAGS = ("preset", "shape", "encoding", "seed", "population", "duration", "objective",
                  "objectives", "terrain", "algorithm", "options", "descriptors",
                  "bins")  # fmt: skip
-
-
-def _figures(out: Path, evolution: Evolution) -> None:
-    """curve.png, population.png, diversity.png of the generations finished so far, and for a
-    run with descriptors archive.json, archive.csv and the archive.png heat map."""
-    _, curve, individuals = read_results(out)
-    as_stored = evolution.config.to_json()
-    figures.run_figures(
-        curve, individuals, out, figures.run_title(as_stored), figures.fitness_label(as_stored)
-    )
-    specs = evolution.config.objectives
-    if specs:
-        write_front(out, individuals, specs)
-        title = f"Pareto front: {figures.run_title(as_stored)}"
-        figures.save(front_figure(specs, individuals, title), out / "front.png")
-    archive = write_archive(out, evolution)
-    if archive is not None:
-        title = f"MAP-Elites archive: {figures.run_title(as_stored)}"
-        figure = archive_figure(archive, title, figures.fitness_label(as_stored))
-        figures.save(figure, out / "archive.png")
 
 
 def run_command(args: argparse.Namespace) -> int:
@@ -281,24 +274,29 @@ def run_command(args: argparse.Namespace) -> int:
     folder = _folder(args)
     from sqlalchemy.exc import SQLAlchemyError
 
-    from softevo.api.faults import reason
+    from softevo.api.store.driving import GenerationMismatchError
+    from softevo.run_store import TakenOverError
 
+    out = folder.out
     try:
         return _run(args, folder)
     except (SQLAlchemyError, OSError) as error:  # a full disk, a folder gone read-only
-        print(
-            f"softevo run: error: {folder.out}: cannot write ({reason(error)}); what was "
-            f"committed is kept: softevo run --resume {folder.out}",
-            file=sys.stderr,
-        )
-        return 1
+        said = f"{out}/run.db: {_reason(error)}; what was committed is kept, go on with: "
+        said += f"softevo run --resume {out}"
+    except TakenOverError:  # a second `softevo run --resume` on the folder: it goes on
+        said = f"{out}: another softevo run took this run over and goes on with it"
+    except GenerationMismatchError as error:  # a store edited by hand
+        said = f"{out}/run.db: {error}"
     finally:
         folder.close()
+    print(f"softevo run: error: {said}", file=sys.stderr)
+    return 1
 
 
 def _run(args: argparse.Namespace, folder: Folder) -> int:
     out, config = folder.out, folder.config
-    generations = args.generations if args.resume and args.generations else config.generations
+    resumed_to = args.generations if args.resume else None
+    generations = config.generations if resumed_to is None else resumed_to
     from softevo.run_store import Checkpoints
 
     checkpoints = Checkpoints(folder)
@@ -309,7 +307,7 @@ def _run(args: argparse.Namespace, folder: Folder) -> int:
         evolution = checkpoints.flush()
         done = len(evolution.state.history)
         if done:
-            _figures(out, evolution)
+            write_figures(out, evolution)
         print(
             f"interrupted after {done} of {generations} generations; "
             f"partial results{' and figures' if done else ''} in {out}/; "
@@ -318,7 +316,7 @@ def _run(args: argparse.Namespace, folder: Folder) -> int:
         )
         return 130
     evolution = checkpoints.flush()
-    _figures(out, evolution)
+    write_figures(out, evolution)
     _print_summary(args, Result.of(evolution), out)
     return 0
 

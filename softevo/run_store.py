@@ -6,6 +6,7 @@ cache.json, no run.db) is checked as before and imported on `--resume`."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import socket
@@ -14,23 +15,25 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Any
 
+from alembic.util.exc import CommandError
 from sqlalchemy.exc import SQLAlchemyError
 
 from softevo.api import store
 from softevo.api.db import Database
-from softevo.api.driver import Driving, RunDriver
+from softevo.api.driver import Driving, RunDriver, Stop
 from softevo.api.faults import Faults, reason
 from softevo.api.store import folders
 from softevo.api.store.driving import Lease
-from softevo.core.config import RunConfig
+from softevo.core.config import ConfigError, RunConfig, resolve
 from softevo.core.limits import BATCH_SIZE, IN_FLIGHT, SAVE_SECONDS
 from softevo.core.search.evolution import Evolution
 from softevo.core.search.generation import Step
 from softevo.core.search.state import GAState
 from softevo.core.search.stats import GenerationStats
 from softevo.results import (
-    read_results,
+    read_population,
     read_resumable,
     write_json,
     write_population,
@@ -56,7 +59,9 @@ class Folder:
         return RunConfig.model_validate(folders.db_config(self.db, self.run_id))
 
     def close(self) -> None:
-        """Close the store: its write-ahead log goes into run.db, one file to copy."""
+        """Close the store, its write-ahead log moved into run.db: one file to copy."""
+        with contextlib.suppress(SQLAlchemyError):  # a full disk: the log stays, read with it
+            folders.checkpoint(self.db)
         self.db.dispose()
 
     @property
@@ -70,46 +75,96 @@ class Folder:
 
 
 def _database(out: Path) -> Database:
-    db = Database(f"sqlite:///{out / DATABASE}")
-    db.upgrade()  # a folder of an older release: its store migrated as the service's is
+    """The folder's store, migrated as the service's is (ValueError: a file that is not one)."""
+    path = out / DATABASE
+    if path.exists() and not path.is_file():
+        raise ValueError(f"{path}: not a file")
+    db = Database(f"sqlite:///{path}")
+    try:
+        folders.check_store(db)
+        db.upgrade()
+    except CommandError as error:  # a revision this release does not know
+        db.dispose()
+        raise ValueError(f"{path}: written by another release of softevo ({error})") from None
+    except (SQLAlchemyError, ValueError) as error:
+        db.dispose()
+        raise ValueError(f"{path}: not a `softevo run` store ({reason(error)})") from None
     return db
 
 
 def new(out: Path, config: RunConfig) -> Folder:
-    """A new run in `out` (a store left there by the same config's run is started afresh)."""
-    for suffix in ("", "-wal", "-shm"):
-        (out / f"{DATABASE}{suffix}").unlink(missing_ok=True)
+    """A new run in `out`, any store left there started afresh (`stored_config` tells the
+    caller whose it was first)."""
+    _remove_store(out)
     db = _database(out)
     folder = Folder(out, db, store.create_run(db, config).id)
     write_json(out / "config.json", config.to_json())  # the folder names its config at once
     return folder
 
 
+def stored_config(out: Path) -> dict[str, Any] | None:
+    """The config of the run in `out`'s run.db, as it is (not migrated, nothing written); None
+    if there is none or it cannot be read."""
+    if not (out / DATABASE).is_file():
+        return None
+    db = Database(f"sqlite:///{out / DATABASE}")
+    try:
+        run_id = folders.the_run(db)
+        return None if run_id is None else folders.db_config(db, run_id)
+    except (SQLAlchemyError, TypeError, ValueError):
+        return None
+    finally:
+        db.dispose()
+
+
 def resume(out: Path, generations: int | None) -> Folder:
     """The stopped run in `out`, to go on to `generations` if given; ValueError (or the folder
     checks' ResumeError) with a one-line reason if it cannot."""
-    if not (out / DATABASE).is_file():
+    path = out / DATABASE
+    if not path.exists():
         return _imported(out, generations)
+    db = _database(out)
     try:
-        db = _database(out)
         run_id = folders.the_run(db)
-    except SQLAlchemyError as error:  # not a database, or not softevo's
-        raise ValueError(f"{out}/{DATABASE}: not a `softevo run` store ({reason(error)})") from None
+    except SQLAlchemyError as error:
+        db.dispose()
+        raise ValueError(f"{path}: not a run to go on with ({reason(error)})") from None
     if run_id is None:  # stopped while importing: the files are still whole
         db.dispose()
         return _imported(out, generations)
     folder = Folder(out, db, run_id)
-    stored = _but_generations(folders.db_config(db, run_id))  # which a --resume may raise
-    if (out / "config.json").is_file() and _but_generations(_config_json(out)) != stored:
+    try:
+        stored, state = store.driving.load(db, run_id)
+        _check(out, folder, stored, state, generations)
+    except (SQLAlchemyError, KeyError, TypeError, ValueError) as error:
+        db.dispose()
+        if isinstance(error, ValueError) and str(error).startswith(str(out)):
+            raise
+        raise ValueError(f"{path}: not a run to go on with ({reason(error)})") from None
+    return folder
+
+
+def _check(out: Path, folder: Folder, stored: Any, state: Any, generations: int | None) -> None:
+    """The stored run against config.json (but for generations, which a --resume raises first
+    in the store) and `generations`; the stored config and state readable."""
+    if (out / "config.json").is_file() and _but_generations(_config_json(out)) != (
+        _but_generations(stored)
+    ):
         raise ValueError(
             f"{out}/config.json: not the config of the run in {DATABASE} (edited, or another "
             "run's); cannot resume"
         )
+    changed = stored if generations is None else {**stored, "generations": generations}
+    try:
+        resolve(changed)
+    except ConfigError as error:
+        raise ValueError(f"{out}/{DATABASE}: {error}") from None
+    if state is not None:
+        GAState.from_json(state)
     if generations is not None and generations < folder.done:
         raise ValueError(
-            f"--generations {generations}: the run already has {folder.done} generations"
+            f"{out}: --generations {generations}: the run already has {folder.done} generations"
         )
-    return folder
 
 
 def _config_json(out: Path) -> object:
@@ -130,16 +185,44 @@ def _but_generations(config: object) -> object:
 def _imported(out: Path, generations: int | None) -> Folder:
     """A folder of a release before the store: checked, then its files become the run's rows."""
     check_folder(out, generations)
+    rows = _population_rows(out)
     evolution = read_resumable(out, generations)
-    _, _, rows = read_results(out)
-    for suffix in ("", "-wal", "-shm"):
-        (out / f"{DATABASE}{suffix}").unlink(missing_ok=True)
+    rows = [row for row in rows if row["generation"] < evolution.state.generation]
+    _remove_store(out)
     db = _database(out)
     known = (evolution.cache, evolution.measures)
-    run_id = folders.import_run(
-        db, evolution.config, evolution.state, known, evolution.elapsed, rows
-    )
+    try:
+        run_id = folders.import_run(
+            db, evolution.config, evolution.state, known, evolution.elapsed, rows
+        )
+    except BaseException:
+        db.dispose()
+        _remove_store(out)  # all or nothing: the files are still what --resume reads
+        raise
     return Folder(out, db, run_id)
+
+
+def _population_rows(out: Path) -> list[dict[str, Any]]:
+    """population.csv's rows, each (generation, index) once; ValueError naming the file."""
+    try:
+        rows = read_population(out)
+    except (KeyError, TypeError, ValueError) as error:
+        raise ValueError(f"{out}/population.csv: not a run's population ({error!r})") from None
+    seen = set()
+    for row in rows:
+        place = (row["generation"], row["index"])
+        if place in seen:
+            raise ValueError(f"{out}/population.csv: generation {place[0]}, index {place[1]} twice")
+        seen.add(place)
+    return rows
+
+
+def _remove_store(out: Path) -> None:
+    for suffix in ("", "-wal", "-shm"):
+        path = out / f"{DATABASE}{suffix}"
+        if path.is_dir():
+            raise ValueError(f"{path}: a folder where the run's store goes")
+        path.unlink(missing_ok=True)
 
 
 @dataclass
@@ -177,6 +260,10 @@ def evolution(folder: Folder, known: Known | None = None) -> Evolution:
     return Evolution.resume(config, state, known.fitness, seconds, known.measures)
 
 
+class TakenOverError(RuntimeError):
+    """Another process drives the folder's run now."""
+
+
 class _Driver(RunDriver):
     """The service's driver, telling `softevo run` of each generation committed."""
 
@@ -210,6 +297,8 @@ def drive(
     except KeyboardInterrupt:
         driver.flush()  # what landed of the generation: not simulated again on --resume
         raise
+    except Stop as stop:  # another process took the folder's run over (its lease)
+        raise TakenOverError(str(stop)) from None
     finally:
         folders.release(folder.db, folder.run_id, owner)
         evaluator.close()
@@ -235,8 +324,10 @@ class Checkpoints:
         evolution_now = evolution(self.folder, self.known)
         write_results(self.folder.out, evolution_now)
         done = len(evolution_now.state.history)
-        rows = folders.population(self.folder.db, self.folder.run_id, done, _last(self.listed))
-        write_population(self.folder.out, rows, append=self.listed is not None)
+        # an append cut short (Ctrl-C) leaves `listed` None: the next flush rewrites the file
+        listed, self.listed = self.listed, None
+        rows = folders.population(self.folder.db, self.folder.run_id, done, _last(listed))
+        write_population(self.folder.out, rows, append=listed is not None)
         self.listed, self.written = done, time.monotonic()
         return evolution_now
 

@@ -10,7 +10,7 @@ import json
 from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
-from sqlalchemy import func, insert, select, update
+from sqlalchemy import func, insert, inspect, select, update
 
 from softevo.api.db import Database, EncodedJSON
 from softevo.api.models import Generation, Individual, Run
@@ -24,6 +24,21 @@ from softevo.core.status import IndividualStatus, RunStatus
 #: The generation of the fitness cache an imported folder brings (its genomes' generations are
 #: not in its files): before every generation, so the run's reads count it as known.
 IMPORTED = -1
+
+
+def check_store(db: Database) -> None:
+    """ValueError for a database that holds tables but is not softevo's (no Alembic version):
+    migrating it would write softevo's tables into another program's file."""
+    tables = inspect(db.engine).get_table_names()
+    if tables and "alembic_version" not in tables:
+        raise ValueError(f"holds other tables ({', '.join(sorted(tables)[:3])})")
+
+
+def checkpoint(db: Database) -> None:
+    """Move SQLite's write-ahead log into the database file, so the folder's run.db is whole
+    by itself (a copy of it alone is the run)."""
+    with db.engine.connect() as connection:
+        connection.exec_driver_sql("PRAGMA wal_checkpoint(TRUNCATE)")
 
 
 def the_run(db: Database) -> int | None:

@@ -7,6 +7,7 @@ the store is imported on resume and goes on the same way."""
 from __future__ import annotations
 
 import json
+import shutil
 from collections.abc import Callable
 from pathlib import Path
 
@@ -141,3 +142,64 @@ def test_a_run_stopped_before_its_raised_generations_were_written_still_resumes(
     (tmp_path / "config.json").write_text(json.dumps({**config.to_json(), "seed": 4}))
     with pytest.raises(ValueError, match=r"config\.json: not the config of the run"):
         run_store.resume(tmp_path, None)
+
+
+BEFORE_THE_STORE = Path(__file__).parent / "data" / "before_the_store"
+
+
+def test_a_folder_written_by_the_release_before_the_store_goes_on_to_the_same_run(
+    tmp_path: Path,
+) -> None:
+    """The files e5fd4bd wrote (`data/before_the_store/README.md`), resumed to 4 generations:
+    every file as this release writes for the uninterrupted run."""
+    old, whole_out = tmp_path / "old", tmp_path / "whole"
+    shutil.copytree(BEFORE_THE_STORE, old)
+    (old / "README.md").unlink()
+    config = json.loads((old / "config.json").read_text())
+    whole_out.mkdir()
+    folder = run_store.new(whole_out, resolve({**config, "generations": 4}))
+    run_store.drive(folder, 1, 4, lambda step: None)
+    whole = library.Result.of(run_store.Checkpoints(folder).flush())
+    same(finish(old, 4), whole)
+    for name in ("population.csv", "curve.csv", "curve.json", "best_robot.json", "state.json"):
+        assert (old / name).read_bytes() == (whole_out / name).read_bytes(), name
+
+
+def test_an_append_cut_short_is_written_again_whole(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Ctrl-C in the middle of appending to population.csv: the interrupt's own flush writes
+    the file again whole, never a row twice."""
+    config = resolve(CONFIG)
+    folder = run_store.new(tmp_path, config)
+    checkpoints = run_store.Checkpoints(folder, seconds=3600.0)
+    run_store.drive(folder, 1, 2, lambda step: None)
+    checkpoints.flush()
+    written = run_store.write_population
+
+    def cut_short(out: Path, rows, append: bool = False) -> None:  # type: ignore[no-untyped-def]
+        with (out / "population.csv").open("a") as handle:
+            handle.write(f"2,0,{next(iter(rows))[2]},mutation\n")  # one row, then Ctrl-C
+        raise KeyboardInterrupt
+
+    run_store.drive(folder, 1, 4, lambda step: None)
+    monkeypatch.setattr(run_store, "write_population", cut_short)
+    with pytest.raises(KeyboardInterrupt):
+        checkpoints.flush()
+    monkeypatch.setattr(run_store, "write_population", written)
+    checkpoints.flush()
+    rows = (tmp_path / "population.csv").read_text().splitlines()[1:]
+    assert len(rows) == len(set(rows)) == 6 * 4
+
+
+def test_a_run_another_process_takes_over_stops_here(tmp_path: Path) -> None:
+    config = resolve(CONFIG)
+    folder = run_store.new(tmp_path, config)
+
+    def report(step: Step) -> None:
+        if step.stats.generation == 0:  # a second `softevo run --resume` on the folder
+            folders.take(folder.db, folder.run_id, "another", 15.0, config.generations)
+
+    with pytest.raises(run_store.TakenOverError):
+        run_store.drive(folder, 1, config.generations, report)
+    assert folder.done == 1  # the first process wrote nothing after it lost the run

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import shutil
+import sqlite3
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -71,6 +72,7 @@ def _shorten_fitness(files: Files) -> None:
 
 
 DEEP = "[" * 100_000 + "]" * 100_000
+HEAD, ROW = "generation,index,fitness", "0,0,0.1,random\n"
 
 CASES: dict[str, tuple[Callable[[Files], None] | tuple[str, str], str]] = {
     "negative generation": (_both_generations(-1), "generation"),
@@ -101,6 +103,20 @@ CASES: dict[str, tuple[Callable[[Files], None] | tuple[str, str], str]] = {
     "config nested 100k deep": (("config.json", DEEP), "nested"),
     "state not JSON": (("state.json", "{"), "JSON"),
     "population.csv garbled": (("population.csv", "generation\nx,y\n"), "population.csv"),
+    "population.csv header misspelt": (
+        ("population.csv", f"{HEAD}nes,operator\n0,0,1,r\n"),
+        "population.csv",
+    ),
+    "population.csv row cut": (("population.csv", f"{HEAD},operator\n0\n"), "population.csv"),
+    "population.csv row twice": (("population.csv", f"{HEAD},operator\n{ROW}{ROW}"), "twice"),
+    "population.csv fitness a word": (
+        ("population.csv", f"{HEAD},operator\n0,0,fast,r\n"),
+        "population.csv",
+    ),
+    "population.csv a cell too many": (
+        ("population.csv", f"{HEAD},operator\n0,0,1,r,9\n"),
+        "population.csv",
+    ),
     "previous null": (_set("state.previous", None), "previous"),
 }
 
@@ -130,20 +146,52 @@ def test_a_tampered_folder_is_refused_in_one_line(
     assert not (folder / "run.db").exists()
 
 
-@pytest.mark.parametrize(
-    ("change", "words"),
-    [
-        (("config.json", '{"preset": "quick"}'), "config.json: not the config of the run"),
-        (("run.db", "not a database " * 100), "run.db: not a `softevo run` store"),
-    ],
-    ids=["config.json edited", "run.db garbled"],
-)
+def _write(name: str, text: str) -> Callable[[Path], None]:
+    return lambda folder: (folder / name).write_text(text)
+
+
+def _sql(*statements: str) -> Callable[[Path], None]:
+    def change(folder: Path) -> None:
+        with sqlite3.connect(folder / "run.db") as connection:
+            for statement in statements:
+                connection.execute(statement)
+        connection.close()
+
+    return change
+
+
+def _directory(folder: Path) -> None:
+    (folder / "run.db").unlink()
+    (folder / "run.db").mkdir()
+
+
+STORE_CASES: dict[str, tuple[Callable[[Path], None], str]] = {
+    "config.json edited": (_write("config.json", '{"preset": "quick"}'),
+                           "config.json: not the config of the run"),
+    "run.db garbled": (_write("run.db", "not a database " * 100),
+                       "run.db: not a `softevo run` store"),
+    "run.db a folder": (_directory, "run.db: not a file"),
+    "run.db of a newer release": (_sql("UPDATE alembic_version SET version_num = '9999'"),
+                                  "run.db: written by another release"),
+    "run.db of another program": (_sql("DROP TABLE alembic_version"), "holds other tables"),
+    "state without a seed": (_sql("""UPDATE runs SET ga_state = '{"x": 1}'"""),
+                             "run.db: not a run to go on with"),
+    "config a word for a count": (
+        _sql("""UPDATE runs SET config = json_set(config, '$.population', 'many')"""),
+        "run.db: population"),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("case", list(STORE_CASES))
 def test_a_folder_at_odds_with_its_store_is_refused_in_one_line(
-    finished: Path, tmp_path: Path, change: tuple[str, str], words: str
+    finished: Path, tmp_path: Path, case: str
 ) -> None:
     folder = tmp_path / "run"
     shutil.copytree(finished, folder)
-    (folder / change[0]).write_text(change[1])
+    change, words = STORE_CASES[case]
+    change(folder)
+    if case == "config a word for a count":
+        (folder / "config.json").unlink()  # else it is refused for differing from it
     before = (folder / "population.csv").read_bytes()
     done = softevo("run", "--resume", str(folder), "--generations", "3")
     assert done.returncode == 2, (done.returncode, done.stderr)
@@ -151,6 +199,21 @@ def test_a_folder_at_odds_with_its_store_is_refused_in_one_line(
     assert len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
     assert lines[0].startswith(f"softevo run: error: --resume {folder}") and words in lines[0]
     assert (folder / "population.csv").read_bytes() == before  # nothing written
+
+
+def test_too_many_generations_are_refused_and_the_folder_still_resumes(
+    finished: Path, tmp_path: Path
+) -> None:
+    folder = tmp_path / "run"
+    shutil.copytree(finished, folder)
+    refused = softevo("run", "--resume", str(folder), "--generations", "100000000")
+    assert refused.returncode == 2 and "Traceback" not in refused.stderr, refused.stderr
+    assert "run.db: generations:" in refused.stderr
+    for generations in ("0", "-1"):
+        refused = softevo("run", "--resume", str(folder), "--generations", generations)
+        assert refused.returncode == 2 and "generations" in refused.stderr, refused.stderr
+    done = softevo("run", "--resume", str(folder), "--generations", "3")
+    assert done.returncode == 0, done.stderr
 
 
 @pytest.mark.parametrize("kind", ["finished", "before_the_store"])

@@ -135,6 +135,8 @@ def test_ctrl_c_stops_cleanly_and_keeps_partial_results(tmp_path: Path) -> None:
     for name in ("curve.png", "population.png", "diversity.png"):  # of the generations done
         assert (out / name).read_bytes()[:4] == b"\x89PNG"
     assert load_robot(out / "best_robot.json").shape == (4, 4, 4)
+    wal = out / "run.db-wal"  # the store's log moved into run.db: one file to copy
+    assert not wal.exists() or wal.stat().st_size == 0
 
 
 SMALL = ("--preset", "quick", "--population", "6", "--duration", "1", "--workers", "1")
@@ -225,8 +227,8 @@ def test_a_store_that_cannot_write_is_said_in_one_line(
     done = softevo("run", *SMALL, "--shape", "2x2x2", "--generations", "2", "--out", str(out))
     assert done.returncode == 1 and "Traceback" not in done.stderr
     said = done.stderr.strip().splitlines()[-1]
-    assert said == (f"softevo run: error: {out}: cannot write (database or disk is full); what "
-                    f"was committed is kept: softevo run --resume {out}")  # fmt: skip
+    assert said == (f"softevo run: error: {out}/run.db: database or disk is full; what was "
+                    f"committed is kept, go on with: softevo run --resume {out}")  # fmt: skip
     monkeypatch.undo()
     resumed = softevo("run", "--resume", str(out), "--json")
     assert resumed.returncode == 0 and len(json.loads(resumed.stdout)["generations"]) == 2
