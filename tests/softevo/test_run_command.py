@@ -17,6 +17,7 @@ from xml.etree import ElementTree
 import pytest
 from sqlalchemy.exc import OperationalError
 
+from softevo.api import store
 from softevo.api.store import driving
 from softevo.core.robots.robot_file import load_robot
 from tests.softevo.inprocess import softevo
@@ -232,3 +233,30 @@ def test_a_store_that_cannot_write_is_said_in_one_line(
     monkeypatch.undo()
     resumed = softevo("run", "--resume", str(out), "--json")
     assert resumed.returncode == 0 and len(json.loads(resumed.stdout)["generations"]) == 2
+
+
+def test_a_store_that_cannot_start_is_said_in_one_line(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def full(*args: object) -> None:
+        raise OperationalError("INSERT", {}, sqlite3.OperationalError("database or disk is full"))
+
+    monkeypatch.setattr(store, "create_run", full)
+    out = tmp_path / "full"
+    done = softevo("run", *SMALL, "--generations", "1", "--out", str(out))
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert (
+        done.stderr.strip()
+        .splitlines()[-1]
+        .endswith(f"--out {out}: cannot start the run's store (database or disk is full)")
+    )
+
+
+def test_another_configs_store_is_refused_without_its_config_json(tmp_path: Path) -> None:
+    out = tmp_path / "taken"
+    run = ("run", *SMALL, "--shape", "2x2x2", "--generations", "1", "--out", str(out))
+    assert softevo(*run).returncode == 0
+    (out / "config.json").unlink()
+    refused = softevo(*run, "--seed", "9")
+    assert refused.returncode == 2 and "holds the results of another config" in refused.stderr
+    assert (out / "run.db").is_file() and softevo("run", "--resume", str(out)).returncode == 0
