@@ -82,13 +82,17 @@ def _database(out: Path) -> Database:
     db = Database(f"sqlite:///{path}")
     try:
         folders.check_store(db)
+    except (SQLAlchemyError, ValueError) as error:
+        db.dispose()
+        raise ValueError(f"{path}: not a `softevo run` store ({reason(error)})") from None
+    try:
         db.upgrade()
     except CommandError as error:  # a revision this release does not know
         db.dispose()
         raise ValueError(f"{path}: written by another release of softevo ({error})") from None
-    except (SQLAlchemyError, ValueError) as error:
+    except SQLAlchemyError as error:  # a full disk, a read-only folder
         db.dispose()
-        raise ValueError(f"{path}: not a `softevo run` store ({reason(error)})") from None
+        raise ValueError(f"{path}: {reason(error)}") from None
     return db
 
 
@@ -300,7 +304,8 @@ def drive(
     except Stop as stop:  # another process took the folder's run over (its lease)
         raise TakenOverError(str(stop)) from None
     finally:
-        folders.release(folder.db, folder.run_id, owner)
+        with contextlib.suppress(SQLAlchemyError):  # the store's own error is the one to say
+            folders.release(folder.db, folder.run_id, owner)
         evaluator.close()
 
 
