@@ -27,11 +27,10 @@ read here (`read_resumable`) to be imported into a store.
 from __future__ import annotations
 
 import csv
-import itertools
 import json
 import math
 import os
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -97,24 +96,20 @@ def write_population(out: Path, rows: Iterable[Any], append: bool = False) -> No
     `softevo.api.store.folders.population`), or `append` them: `POPULATION_COLUMNS`, then one
     column per measure of the first generation's records (an appended file keeps its own)."""
     path = out / "population.csv"
-    rows = iter(rows)
-    first = next(rows, None)
-    if first is None and append:
+    rows = list(rows)
+    if append and not rows:
         return
-    names = _population_header(path)[len(POPULATION_COLUMNS) :] if append else None
+    if append:
+        names = _population_header(path)[len(POPULATION_COLUMNS) :]
+    else:
+        first = [row[4] or {} for row in rows if row[0] == rows[0][0]] if rows else []
+        names = list(dict.fromkeys(name for record in first for name in record))
     temporary = path if append else out / "population.csv.tmp"
     with temporary.open("a" if append else "w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle, lineterminator="\n")
-        pending = [] if first is None else [first]
-        if names is None:
-            pending += _first_generation(rows, pending)
-            names = list(
-                dict.fromkeys(
-                    n for row in pending if row[0] == pending[0][0] for n in (row[4] or {})
-                )
-            )
+        if not append:
             writer.writerow([*POPULATION_COLUMNS, *names])
-        for generation, index, fitness, operator, record in itertools.chain(pending, rows):
+        for generation, index, fitness, operator, record in rows:
             record = record or {}
             writer.writerow(
                 [generation, index, _cell(fitness), operator,
@@ -122,19 +117,6 @@ def write_population(out: Path, rows: Iterable[Any], append: bool = False) -> No
             )  # fmt: skip
     if not append:
         os.replace(temporary, path)
-
-
-def _first_generation(rows: Iterator[Any], pending: list[Any]) -> list[Any]:
-    """The rest of the first row's generation, taken from `rows` (their measures name the
-    columns)."""
-    taken: list[Any] = []
-    if not pending:
-        return taken
-    for row in rows:
-        taken.append(row)
-        if row[0] != pending[0][0]:
-            break
-    return taken
 
 
 def _cell(value: float | None) -> float | str:

@@ -208,14 +208,11 @@ def default_out(config: RunConfig) -> Path:
 def _not_anothers(args: argparse.Namespace, out: Path, config: RunConfig) -> None:
     """Refuse a folder that holds the results of a different config (the same config's are
     rewritten with the same numbers: a run is deterministic in its config)."""
-    from softevo.run_store import stored_config
+    from softevo.run_store import config_json, stored_config
 
-    try:
-        stored = json.loads((out / "config.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        stored = None
-    kept = stored_config(out)  # the run in run.db, if any: config.json may be gone
-    if any(found is not None and found != config.to_json() for found in (stored, kept)):
+    # config.json, and the run in run.db (config.json may be gone)
+    found = (config_json(out), stored_config(out))
+    if any(stored is not None and stored != config.to_json() for stored in found):
         args.parser.error(
             f"--out {out}: holds the results of another config; give another --out, "
             f"or --resume {out} to go on with that run"

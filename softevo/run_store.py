@@ -139,39 +139,42 @@ def resume(out: Path, generations: int | None) -> Folder:
     folder = Folder(out, db, run_id)
     try:
         stored, state = store.driving.load(db, run_id)
-        _check(out, folder, stored, state, generations)
+        if state is not None:
+            GAState.from_json(state)
     except (SQLAlchemyError, KeyError, TypeError, ValueError) as error:
         db.dispose()
-        if isinstance(error, ValueError) and str(error).startswith(str(out)):
-            raise
         raise ValueError(f"{path}: not a run to go on with ({reason(error)})") from None
+    try:
+        _check(out, folder, stored, generations)
+    except ValueError:
+        db.dispose()
+        raise
     return folder
 
 
-def _check(out: Path, folder: Folder, stored: Any, state: Any, generations: int | None) -> None:
+def _check(out: Path, folder: Folder, stored: Any, generations: int | None) -> None:
     """The stored run against config.json (but for generations, which a --resume raises first
-    in the store) and `generations`; the stored config and state readable."""
-    if (out / "config.json").is_file() and _but_generations(_config_json(out)) != (
+    in the store), and valid with `generations`."""
+    if (out / "config.json").is_file() and _but_generations(config_json(out)) != (
         _but_generations(stored)
     ):
         raise ValueError(
             f"{out}/config.json: not the config of the run in {DATABASE} (edited, or another "
             "run's); cannot resume"
         )
-    changed = stored if generations is None else {**stored, "generations": generations}
+    raised = isinstance(stored, dict) and generations is not None
     try:
-        resolve(changed)
+        resolve({**stored, "generations": generations} if raised else stored)
     except ConfigError as error:
         raise ValueError(f"{out}/{DATABASE}: {error}") from None
-    if state is not None:
-        GAState.from_json(state)
     if generations is not None and generations < folder.done:
         raise ValueError(
             f"{out}: --generations {generations}: the run already has {folder.done} generations"
         )
 
 
-def _config_json(out: Path) -> object:
+def config_json(out: Path) -> object:
+    """`out`'s config.json as JSON (None: no readable file)."""
     try:
         return json.loads((out / "config.json").read_text(encoding="utf-8"))
     except (OSError, ValueError):

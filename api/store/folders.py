@@ -154,9 +154,9 @@ def import_run(
         if history:
             connection.execute(
                 insert(Generation.__table__),
-                [{"run_id": run.id, **{key: stats.to_json().get(key) for key in CURVE_FIELDS},
-                  **{key: getattr(stats, key) for key in _OPTIONAL},
-                  "seconds": 0.0, "committed_at": now()} for stats in history],
+                [{"run_id": run.id, **{key: row.get(key) for key in (*CURVE_FIELDS, *_OPTIONAL)},
+                  "seconds": 0.0, "committed_at": now()}
+                 for row in (stats.to_json() for stats in history)],
             )  # fmt: skip
         fitness, measures = known
         cached = [(IMPORTED, number, key, fitness[key], "imported", measures.get(key, {}))

@@ -3,9 +3,9 @@
 
 The service's driver runs the same step with persistence around it, for the service and for
 `softevo run` (its store in the output folder); a run held here is also how the folder's files
-and `Result` see a stored run. Genomes already
-evaluated in this run (survivors, duplicates) are not simulated again: the run has one simulation
-setting, so a genome's hash identifies its fitness.
+and `Result` see a stored run. Genomes already evaluated in this run (survivors, duplicates) are
+not simulated again: the run has one simulation setting, so a genome's hash identifies its
+fitness.
 """
 
 from __future__ import annotations
