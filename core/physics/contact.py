@@ -15,11 +15,8 @@ import math
 import numpy as np
 from numba import njit
 
+from softevo.core.physics.jit import JIT
 from softevo.core.robots.terrain import sincos
-
-#: Options of every kernel: cached, callable without the GIL, plain IEEE arithmetic (numpy's error
-#: model and no fastmath), no bounds checks.
-JIT = {"cache": True, "nogil": True, "error_model": "numpy", "boundscheck": False}
 
 _sincos = njit(inline="always", **JIT)(sincos)
 

@@ -18,7 +18,7 @@ import socket
 import threading
 import time
 import weakref
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import CancelledError, Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any
@@ -153,10 +153,32 @@ def pool_context() -> multiprocessing.context.BaseContext:
     context = multiprocessing.get_context("forkserver")
     context.set_forkserver_preload([PRELOAD])
     try:
-        forkserver.ensure_running()  # started now, not in the first submit where it can fail
+        with _safe_path():
+            forkserver.ensure_running()  # started now, not in the first submit where it can fail
     except OSError:
         return multiprocessing.get_context("spawn")
     return context
+
+
+_ENVIRON = threading.Lock()
+
+
+@contextlib.contextmanager
+def _safe_path() -> Iterator[None]:
+    """Start the fork server with Python's safe path (`PYTHONSAFEPATH`, as `python -P`). It runs
+    as `python -c ...`, which puts the working directory first on its path, and Python 3.11 does
+    not apply the `sys_path` it is handed: in a checkout's root the source folder `softevo/`
+    (which holds no `core`) would stand in for the installed package."""
+    with _ENVIRON:
+        before = os.environ.get("PYTHONSAFEPATH")
+        os.environ["PYTHONSAFEPATH"] = "1"
+        try:
+            yield
+        finally:
+            if before is None:
+                del os.environ["PYTHONSAFEPATH"]
+            else:
+                os.environ["PYTHONSAFEPATH"] = before
 
 
 class PoolEvaluator(Evaluator):

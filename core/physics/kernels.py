@@ -51,7 +51,8 @@ import math
 import numpy as np
 from numba import njit
 
-from softevo.core.physics.contact import JIT, contact_pass, contact_scratch
+from softevo.core.physics.contact import contact_pass, contact_scratch
+from softevo.core.physics.jit import JIT
 
 #: Smallest spring length divided by (guards a collapsed or padding spring against 0 / 0).
 D_MIN = 1e-12
