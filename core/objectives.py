@@ -64,3 +64,22 @@ MEASURES: dict[str, tuple[str, str, float | None]] = {
 
 #: Measures the simulation only takes when asked to count the actuators' work.
 ENERGY_MEASURES = frozenset({"energy", "cost_of_transport", "efficiency"})
+
+#: How a reader is told the unit of a measure that is a pure number (MEASURES' "1").
+PURE_NUMBERS: dict[str, str] = {
+    "cost_of_transport": "dimensionless",
+    "stable": "0 or 1",
+    "masses": "count",
+    "springs": "count",
+}
+
+
+def measure_unit(measure: str) -> str:
+    """A measure's unit as a reader wants it on an axis: never the bare "1"."""
+    unit = MEASURES[measure][0]
+    return PURE_NUMBERS.get(measure, "dimensionless") if unit == "1" else unit
+
+
+def measure_label(measure: str) -> str:
+    """`cost of transport (dimensionless)`: a measure named with its unit, for axes and titles."""
+    return f"{measure.replace('_', ' ')} ({measure_unit(measure)})"

@@ -19,6 +19,8 @@ or is interrupted, so an interrupted run still has its partial results:
     front.csv, front.png    a run with objectives: the non-dominated set of every individual
                       evaluated (population.csv's columns), and every robot as a dot with the
                       front drawn over them
+    hypervolume.png   a run with objectives: the hypervolume of the front so far against the
+                      simulations run (curve.csv's hypervolume and evaluations)
 
 A folder written before run.db (state.json and cache.json were what `--resume` went on from) is
 read here (`read_resumable`) to be imported into a store.
@@ -38,7 +40,7 @@ from softevo.core.config import ConfigError, resolve
 from softevo.core.nulls import from_null, from_null_record, to_null
 from softevo.core.outputs import figures
 from softevo.core.outputs.archive_figures import archive_figure
-from softevo.core.outputs.front_figure import front_figure
+from softevo.core.outputs.front_figure import front_figure, hypervolume_figure, objectives_text
 from softevo.core.search.algorithm import GAState
 from softevo.core.search.evolution import Evolution
 from softevo.core.search.front import front_rows
@@ -262,8 +264,9 @@ def _trim_population(folder: Path, generations: int) -> None:
 
 
 def write_figures(out: Path, evolution: Evolution) -> None:
-    """curve.png, population.png, diversity.png of the generations finished so far, and for a
-    run with descriptors archive.json, archive.csv and the archive.png heat map."""
+    """curve.png, population.png, diversity.png of the generations finished so far; for a run
+    with objectives front.csv, front.png and hypervolume.png; for a run with descriptors
+    archive.json, archive.csv and the archive.png heat map."""
     _, curve, individuals = read_results(out)
     as_stored = evolution.config.to_json()
     figures.run_figures(
@@ -272,8 +275,11 @@ def write_figures(out: Path, evolution: Evolution) -> None:
     specs = evolution.config.objectives
     if specs:
         write_front(out, individuals, specs)
-        title = f"Pareto front: {figures.run_title(as_stored)}"
+        task = f"{evolution.config.algorithm}, {figures.run_title(as_stored, fitness=False)}"
+        title = f"Pareto front of {objectives_text(specs)}\n{task}"
         figures.save(front_figure(specs, individuals, title), out / "front.png")
+        title = f"Hypervolume of {objectives_text(specs)}\n{task}"
+        figures.save(hypervolume_figure(specs, curve, title), out / "hypervolume.png")
     archive = write_archive(out, evolution)
     if archive is not None:
         title = f"MAP-Elites archive: {figures.run_title(as_stored)}"

@@ -46,16 +46,17 @@ def pyplot() -> Any:
 SPEED = "speed (m/s)"
 
 
-def run_title(config: dict[str, Any], run: str = "") -> str:
+def run_title(config: dict[str, Any], run: str = "", fitness: bool = True) -> str:
     """`run 3 (4x4x4, seed 1, speed on flat ground, preset quick)`: a run named with its box,
-    seed and task, so a figure says what it shows."""
+    seed and task, so a figure says what it shows; `fitness=False` leaves the fitness out (a
+    figure of several objectives names them itself)."""
     terrain = config.get("sim", {}).get("terrain", {}).get("kind", "flat")
     shape = config.get("shape")
     objective = config.get("objective") or "speed"
     parts = [
         f"{'x'.join(map(str, shape))}" if shape else "",
         f"seed {config.get('seed')}",
-        f"{objective} on {terrain} ground",
+        f"{objective} on {terrain} ground" if fitness else f"{terrain} ground",
         f"preset {config.get('preset') or 'custom'}",
     ]
     inner = ", ".join(p for p in parts if p)

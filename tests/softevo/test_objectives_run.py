@@ -59,6 +59,7 @@ def test_softevo_run_writes_the_pareto_columns(tmp_path: Path) -> None:
     assert list(rows[0])[-2:] == ["hypervolume", "front_size"]
     assert float(rows[-1]["hypervolume"]) > 0 and int(rows[-1]["front_size"]) >= 1
     assert (out / "front.png").stat().st_size > 0
+    assert (out / "hypervolume.png").stat().st_size > 0  # against the simulations run
     config, _, individuals = read_results(out)
     specs = resolve(config).objectives
     with (out / "front.csv").open(encoding="utf-8") as handle:
