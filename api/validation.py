@@ -81,8 +81,8 @@ def check_limits(config: RunConfig, limits: Limits, prefix: tuple[str, ...] = ()
     if config.sim.duration > limits.max_duration:
         refuse(["sim", "duration"], f"sim.duration: {config.sim.duration} s is over the limit "
                f"of {limits.max_duration} s (SOFTEVO_MAX_DURATION)")  # fmt: skip
-    if config.sim.dt < limits.min_dt:
-        refuse(["sim", "dt"], f"sim.dt: {config.sim.dt} s is under the limit of "
+    if config.sim.step < limits.min_dt:
+        refuse(["sim", "dt"], f"sim.dt: {config.sim.step} s is under the limit of "
                f"{limits.min_dt} s (SOFTEVO_MIN_DT)")  # fmt: skip
     evaluations = config.population * config.generations
     if evaluations > limits.max_evaluations:

@@ -144,7 +144,7 @@ def numpy_simulate(mechs: list[Mechanics], n_steps: int) -> np.ndarray:
     )
     x = np.stack([m.positions for m in mechs], axis=2).transpose(1, 0, 2).copy()  # [3, M, B]
     v = np.zeros_like(x)
-    h, dt, omega = sim.dt / sim.mass, sim.dt, first.omega
+    h, dt, omega = sim.step / sim.mass, sim.step, first.omega
     weight, size = sim.mass * sim.gravity, n_masses * n_robots
     for step in range(n_steps):
         t = step * dt
@@ -234,7 +234,7 @@ def main() -> None:
     print(f"machine: {os.cpu_count()} cores, {cpu_model()}; Python {platform.python_version()}, "
           f"numba {numba.__version__}, NumPy {np.__version__}")  # fmt: skip
     print(f"robot: solid 4x4x4 hard block, {mech.n_masses} masses, {n_springs} springs, "
-          f"{n_steps} steps (duration {duration:g} s, dt {mech.sim.dt:g}); "
+          f"{n_steps} steps (duration {duration:g} s, dt {mech.sim.step:g}); "
           f"median of {repeats} runs (single robot: {2 * repeats + 1})\n")  # fmt: skip
 
     simulate(mech)  # compile (or load) both kernels before timing

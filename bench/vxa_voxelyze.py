@@ -143,7 +143,7 @@ def heading(shift: np.ndarray) -> float:
 
 def softevo_run(robot: VoxelRobot, voxel: int | None) -> tuple[float, float, Swing | None]:
     """softevo's displacement over its clock, heading, and voxel `voxel`'s swing."""
-    every = max(1, round(RECORD_SECONDS / robot.sim.dt))
+    every = max(1, round(RECORD_SECONDS / robot.sim.step))
     result, trajectory = simulate(robot, record_every=every, energy=False)
     shift = np.subtract(result.com_end, result.com_start)
     swing = None

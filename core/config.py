@@ -150,7 +150,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         "mutation_probability": 0.5,
         "mutation_genes": 2,
         "immigrants": 0.125,
-        "sim": {"duration": 3.0, "settle_time": 0.5},
+        "sim": {"profile": "physical", "duration": 3.0, "settle_time": 0.5},
     },
 }
 
@@ -223,11 +223,7 @@ def resolve(request: dict[str, Any]) -> RunConfig:
     sim_overrides = request.get("sim", {})
     if not isinstance(sim_overrides, dict):
         raise ConfigError("sim: expected an object of simulation settings")
-    merged["sim"] = {
-        **SimSettings().model_dump(),
-        **PRESETS[preset].get("sim", {}),
-        **sim_overrides,
-    }
+    merged["sim"] = {**PRESETS[preset].get("sim", {}), **sim_overrides}
     try:
         return RunConfig.model_validate(merged)
     except ValidationError as error:

@@ -276,7 +276,7 @@ def simulate(
         raise ValueError(f"trajectory_fps: must be a finite number > 0, got {trajectory_fps!r}")
     parsed = _robot(robot, duration, terrain)
     dropped = dropped_voxels(parsed, build_mechanics(parsed))
-    record_every = max(1, round(1.0 / (trajectory_fps * parsed.sim.dt))) if trajectory_fps else 0
+    record_every = max(1, round(1.0 / (trajectory_fps * parsed.sim.step))) if trajectory_fps else 0
     warm_up()  # load the compiled kernels first, so wall_seconds times the simulation alone
     result, trajectory = run_physics(parsed, record_every=record_every)
     measures = {**result.to_json(), "dropped_voxels": dropped}

@@ -309,7 +309,7 @@ def _frames(robot: Robot, fps: float, seconds: float) -> tuple[np.ndarray, np.nd
     mechanics = replace(build_mechanics(robot), sim=sim)
     if n_frames * mechanics.n_masses > MAX_REPLAY_POSITIONS:
         raise PictureError(f"{n_frames} frames of {mechanics.n_masses} masses is too many")
-    per_step = fps * sim.dt  # frames per step; one frame for the whole run when it is tiny
+    per_step = fps * sim.step  # frames per step; one frame for the whole run when it is tiny
     every = sim.n_steps if per_step * sim.n_steps <= 1 else max(1, math.floor(1.0 / per_step))
     _result, trajectory = simulate(mechanics, record_every=every)
     assert trajectory is not None

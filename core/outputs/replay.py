@@ -28,7 +28,7 @@ def record_every(robot: Robot, masses: int, fps: float, max_positions: int) -> i
     """Steps between frames: `fps` frames per simulated second, fewer if the frames would hold
     more than `max_positions` positions."""
     sim = robot.sim
-    wanted = max(1, round(1.0 / (fps * sim.dt)))
+    wanted = max(1, round(1.0 / (fps * sim.step)))
     frames_allowed = max(2, max_positions // max(1, masses) - 1)
     return max(wanted, math.ceil(sim.n_steps / frames_allowed))
 
@@ -60,7 +60,7 @@ def replay_frames(
     return {
         "speed": to_null(result.speed),
         "measures": {key: measures[key] for key in MEASURES},
-        "fps": 1.0 / (every * robot.sim.dt),
+        "fps": 1.0 / (every * robot.sim.step),
         "blew_up_at": blew_up_at,
         "robot": robot_to_json(robot),
         "terrain": terrain_view(robot.sim.terrain, trajectory.frames),

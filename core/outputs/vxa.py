@@ -136,7 +136,7 @@ def material_table(
 def _simulator(xml: _Xml, sim: SimSettings, slow_damping_z: float) -> None:
     xml.open("Simulator")
     xml.comment(
-        f"Voxelyze picks its own stable time step (DtFrac); softevo's dt = {_number(sim.dt)} s. "
+        f"Voxelyze picks its own stable time step (DtFrac); softevo's dt = {_number(sim.step)} s. "
         f"SlowDampingZ matches softevo's velocity factor {_number(sim.damping)} per step"
     )
     xml.open("Integration")

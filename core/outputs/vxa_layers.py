@@ -126,7 +126,7 @@ def slow_damping(robot: VoxelRobot, moduli: np.ndarray, voxel_mass: float) -> fl
     every velocity by `damping` each step, a rate -ln(damping) / dt. Matched for the mean
     sqrt(E) of the robot's voxels (one number for all; stiffer voxels are damped more there)."""
     sim = robot.sim
-    rate = -math.log(sim.damping) / sim.dt
+    rate = -math.log(sim.damping) / sim.step
     mean_root = float(np.mean(np.sqrt(moduli * sim.edge_length / voxel_mass)))
     return rate / (2 * mean_root) if mean_root > 0 else 0.0
 

@@ -61,6 +61,11 @@ V_MIN = 1e-300
 
 
 @njit(inline="always", **JIT)
+def _length(dx, dy, dz):
+    return math.sqrt(dx * dx + dy * dy + dz * dz)
+
+
+@njit(inline="always", **JIT)
 def _spring_force(dx, dy, dz, k, rest, amp_sin, amp_cos, sin_t, cos_t):
     """Force f (x_j - x_i) on the first end of a spring with vector (dx, dy, dz) = x_j - x_i.
 
@@ -73,7 +78,30 @@ def _spring_force(dx, dy, dz, k, rest, amp_sin, amp_cos, sin_t, cos_t):
 
 
 @njit(inline="always", **JIT)
-def _integrate(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt):
+def _damped_spring_force(dx, dy, dz, k, rest, amp_sin, amp_cos, sin_t, cos_t, damp, last):
+    """`_spring_force` with a dashpot in parallel: `damp` (N s/m over dt) times the change of the
+    spring's length since the last step, (d - last) / dt, which semi-implicit Euler makes the
+    relative velocity along the spring. Returns the force and the length d."""
+    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+    length0 = rest + amp_sin * sin_t + amp_cos * cos_t
+    f = (k * (d - length0) + damp * (d - last)) / max(d, D_MIN)
+    return f * dx, f * dy, f * dz, d
+
+
+@njit(inline="always", **JIT)
+def _normal_force(ground_k, ground_c, depth, approach):
+    """The ground's push (N) on a point `depth` (m) under its surface, moving into it at
+    `approach` (m/s): a penalty spring and, in contact only, a dashpot, never pulling."""
+    normal = ground_k * max(depth, 0.0)
+    if ground_c > 0.0 and normal > 0.0:
+        normal = max(normal + ground_c * approach, 0.0)
+    return normal
+
+
+@njit(inline="always", **JIT)
+def _integrate(
+    step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, ground_c, friction, damping, dt
+):
     """Ground contact, friction, damping and the semi-implicit Euler update of every mass.
 
     All arrays are 1-D and the same length; `fz` already holds the weight. Shared by both kernels,
@@ -81,7 +109,7 @@ def _integrate(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction,
     """
     for m in range(x.shape[0]):
         h = step_factor[m]
-        normal = ground_k * max(-z[m], 0.0)
+        normal = _normal_force(ground_k, ground_c, -z[m], -vz[m])
         ux = vx[m] + fx[m] * h
         uy = vy[m] + fy[m] * h
         uz = vz[m] + (fz[m] + normal) * h
@@ -97,8 +125,8 @@ def _integrate(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction,
 
 @njit(inline="always", **JIT)
 def _integrate_terrain(
-    step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt, kind, tp,
-    contact, near,
+    step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, ground_c, friction, damping, dt,
+    kind, tp, contact, near,
 ):  # fmt: skip
     """`_integrate` on any terrain: the penalty force along the surface normal, Coulomb
     friction against the velocity's part in the tangent plane (`contact` and `near`: scratch
@@ -108,6 +136,9 @@ def _integrate_terrain(
     for m in range(x.shape[0]):
         h = step_factor[m]
         normal = ground_k * depth[m]
+        if ground_c > 0.0 and normal > 0.0:
+            into = -(vx[m] * nx[m] + vy[m] * ny[m] + vz[m] * nz[m])
+            normal = _normal_force(ground_k, ground_c, depth[m], into)
         ux = vx[m] + (fx[m] + normal * nx[m]) * h
         uy = vy[m] + (fy[m] + normal * ny[m]) * h
         uz = vz[m] + (fz[m] + normal * nz[m]) * h
@@ -127,16 +158,17 @@ def _integrate_terrain(
 
 @njit(inline="always", **JIT)
 def _advance(
-    step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt, kind, tp,
-    contact, near,
+    step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, ground_c, friction, damping, dt,
+    kind, tp, contact, near,
 ):  # fmt: skip
     """One step's contact and integration for both kernels: the flat ground's original
     arithmetic (`_integrate`, to the last bit) or any other terrain's."""
     if kind == 0:
-        _integrate(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt)
+        _integrate(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, ground_c, friction,
+                   damping, dt)  # fmt: skip
     else:
-        _integrate_terrain(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction,
-                           damping, dt, kind, tp, contact, near)  # fmt: skip
+        _integrate_terrain(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, ground_c,
+                           friction, damping, dt, kind, tp, contact, near)  # fmt: skip
 
 
 @njit(inline="always", **JIT)
@@ -153,7 +185,8 @@ def simulate_one(
     step_factor,  # [M] dt / mass, or 0 for a mass that must not move
     spring_a, spring_b,  # [S] int64 mass indices (the lattice's order: sorted, a < b)
     stiffness, rest, amp_sin, amp_cos,  # [S] float64
-    omega, dt, n_steps, weight, ground_k, friction, damping,
+    damp,  # [S] each spring's dashpot over dt (N/m), or [0]: no material damping
+    omega, dt, n_steps, weight, ground_k, ground_c, friction, damping,
     terrain_kind, terrain,  # softevo.core.robots.terrain.kernel_params
     settle_step, settle_x, settle_y, settle_z,  # positions copied when step == settle_step
     record_every, frames,  # frames [F, 3, M]: positions every record_every steps, and the last
@@ -184,6 +217,12 @@ def simulate_one(
         fill[spring_a[s]] += 1
         incident[fill[spring_b[s]]] = ~s
         fill[spring_b[s]] += 1
+    damped = damp.shape[0] > 0
+    last = np.empty(n_springs if damped else 0)  # each spring's length at the last step
+    for s in range(last.shape[0]):
+        i = spring_a[s]
+        j = spring_b[s]
+        last[s] = _length(x[j] - x[i], y[j] - y[i], z[j] - z[i])
     frame = 0
     for step in range(n_steps + 1):
         if step == settle_step:
@@ -213,10 +252,18 @@ def simulate_one(
                     sfx[s], sfy[s], sfz[s], stiffness[s], rest[s], amp_sin[s], amp_cos[s],
                     sin_t, cos_t, omega,
                 )  # fmt: skip
-        for s in range(n_springs):
-            sfx[s], sfy[s], sfz[s] = _spring_force(
-                sfx[s], sfy[s], sfz[s], stiffness[s], rest[s], amp_sin[s], amp_cos[s], sin_t, cos_t
-            )
+        if damped:
+            for s in range(n_springs):
+                sfx[s], sfy[s], sfz[s], last[s] = _damped_spring_force(
+                    sfx[s], sfy[s], sfz[s], stiffness[s], rest[s], amp_sin[s], amp_cos[s],
+                    sin_t, cos_t, damp[s], last[s],
+                )  # fmt: skip
+        else:
+            for s in range(n_springs):
+                sfx[s], sfy[s], sfz[s] = _spring_force(
+                    sfx[s], sfy[s], sfz[s], stiffness[s], rest[s], amp_sin[s], amp_cos[s],
+                    sin_t, cos_t,
+                )  # fmt: skip
         # Force on each mass, summed in registers in spring order (what `F_i += ...` means).
         for m in range(n_masses):
             ax = 0.0
@@ -235,8 +282,8 @@ def simulate_one(
             fx[m] = ax
             fy[m] = ay
             fz[m] = az
-        _advance(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt,
-                 terrain_kind, terrain, contact, near)  # fmt: skip
+        _advance(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, ground_c, friction,
+                 damping, dt, terrain_kind, terrain, contact, near)  # fmt: skip
 
 
 @njit(**JIT)
@@ -245,7 +292,8 @@ def simulate_many(
     step_factor,  # [P, B] dt / mass, or 0 for a point the robot lacks
     offsets,  # [D] int64, ascending: slot (q, p) is the spring from point p to p + offsets[q]
     stiffness, rest, amp_sin, amp_cos,  # [D, P, B] float64, k = 0 where a slot is no spring
-    omega, dt, n_steps, weight, ground_k, friction, damping,
+    damp,  # [D, P, B] each slot's dashpot over dt (N/m), or [0, 0, 0]: no material damping
+    omega, dt, n_steps, weight, ground_k, ground_c, friction, damping,
     terrain_kind, terrain,  # softevo.core.robots.terrain.kernel_params
     settle_step, settle_x, settle_y, settle_z,  # [P, B]
     energy,  # [D, P, B] actuator work of each slot from settle_step on (J), or [0, 0, 0]
@@ -263,6 +311,13 @@ def simulate_many(
     amp_sin = amp_sin.reshape(n_dir, n)
     amp_cos = amp_cos.reshape(n_dir, n)
     measure = energy.shape[0] > 0
+    damped = damp.shape[0] > 0
+    damp = damp.reshape(damp.shape[0], damp.shape[1] * damp.shape[2])
+    last = np.zeros(damp.shape)  # each slot's length at the last step
+    for q in range(last.shape[0]):
+        shift = offsets[q] * n_robots
+        for e in range(n - shift):
+            last[q, e] = _length(x[e + shift] - x[e], y[e + shift] - y[e], z[e + shift] - z[e])
     energy = energy.reshape(energy.shape[0], energy.shape[1] * energy.shape[2])
     # Spring force components of every slot, then the force on every point.
     sfx = np.empty((n_dir, n))
@@ -301,6 +356,14 @@ def simulate_many(
                         xj[e] - xi[e], yj[e] - yi[e], zj[e] - zi[e],
                         k[e], r0[e], a_s[e], a_c[e], sin_t, cos_t, omega,
                     )  # fmt: skip
+            if damped:
+                c, lq = damp[q], last[q]
+                for e in range(count):
+                    px[e], py[e], pz[e], lq[e] = _damped_spring_force(
+                        xj[e] - xi[e], yj[e] - yi[e], zj[e] - zi[e],
+                        k[e], r0[e], a_s[e], a_c[e], sin_t, cos_t, c[e], lq[e],
+                    )  # fmt: skip
+                continue
             for e in range(count):
                 px[e], py[e], pz[e] = _spring_force(
                     xj[e] - xi[e], yj[e] - yi[e], zj[e] - zi[e],
@@ -337,5 +400,5 @@ def simulate_many(
                 fy[e] += py[e]
             for e in range(count):
                 fz[e] += pz[e]
-        _advance(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, friction, damping, dt,
-                 terrain_kind, terrain, contact, near)  # fmt: skip
+        _advance(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, ground_c, friction,
+                 damping, dt, terrain_kind, terrain, contact, near)  # fmt: skip

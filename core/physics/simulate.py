@@ -148,15 +148,30 @@ def _scalars(mech: Mechanics) -> tuple:
     sim = mech.sim
     return (
         mech.omega,
-        sim.dt,
+        sim.step,
         sim.n_steps,
         sim.mass * sim.gravity,
         sim.ground_stiffness,
+        ground_damping(sim),
         sim.friction,
-        sim.damping,
+        sim.velocity_factor,
         *kernel_params(sim.terrain),
         sim.settle_steps,
     )
+
+
+def ground_damping(sim: SimSettings) -> float:
+    """The ground contact's dashpot (N s/m): `contact_damping` of critical for one mass."""
+    return 2.0 * sim.contact_damping * math.sqrt(sim.ground_stiffness * sim.mass)
+
+
+def spring_dashpots(mech: Mechanics) -> np.ndarray:
+    """Each spring's dashpot over dt (N/m, `step.spring_damping`), or no array at all where the
+    material is undamped (the kernels then take the undamped arithmetic, to the last bit)."""
+    sim = mech.sim
+    if sim.material_damping == 0.0:
+        return np.zeros(0)
+    return 2.0 * sim.material_damping * np.sqrt(mech.stiffness * sim.mass / 2.0) / sim.step
 
 
 #: A spring longer than this many times its longest rest length at the end means the integration
@@ -230,7 +245,7 @@ def simulate(
     settle = np.empty_like(pos)
     n_frames = len(range(0, n_steps, record_every)) + 1 if record_every > 0 else 0
     frames = np.empty((n_frames, 3, mech.n_masses))
-    step_factor = np.full(mech.n_masses, mech.sim.dt / mech.sim.mass)
+    step_factor = np.full(mech.n_masses, mech.sim.step / mech.sim.mass)
     *scalars, settle_step = _scalars(mech)
     springs = mech.lattice.springs
     work = np.zeros(mech.n_springs if energy else 0)
@@ -238,14 +253,14 @@ def simulate(
     kernels.simulate_one(
         pos[0], pos[1], pos[2], vel[0], vel[1], vel[2], step_factor,
         np.ascontiguousarray(springs[:, 0]), np.ascontiguousarray(springs[:, 1]),
-        mech.stiffness, mech.rest_length, mech.amp_sin, mech.amp_cos,
+        mech.stiffness, mech.rest_length, mech.amp_sin, mech.amp_cos, spring_dashpots(mech),
         *scalars, settle_step, settle[0], settle[1], settle[2], record_every, frames, work,
     )  # fmt: skip
     wall = time.perf_counter() - started
     result = _result(mech, settle.T, pos.T.copy(), wall, work if energy else None)
     if not record_every:
         return result, None
-    times = np.array([*range(0, n_steps, record_every), n_steps], dtype=np.float64) * mech.sim.dt
+    times = np.array([*range(0, n_steps, record_every), n_steps], dtype=np.float64) * mech.sim.step
     trajectory = Trajectory(
         times=times,
         frames=frames.transpose(0, 2, 1).copy(),
@@ -294,7 +309,8 @@ def _run_group(group: list[Mechanics], energy: bool) -> list[SimResult]:
     box_xyz = np.stack(np.unravel_index(np.arange(n_points), (bz, by, bx))[::-1], axis=1) + low
     pos = np.repeat((box_xyz.T * edge)[:, :, None], n_robots, axis=2)  # [3, P, B]
     step_factor = np.zeros((n_points, n_robots))
-    params = np.zeros((4, len(offsets), n_points, n_robots))
+    damped = first.sim.material_damping > 0.0
+    params = np.zeros((5 if damped else 4, len(offsets), n_points, n_robots))
     box_rows, slots = [], []
     for r, (mech, c) in enumerate(zip(group, coords, strict=True)):
         rel = c - low
@@ -304,13 +320,9 @@ def _run_group(group: list[Mechanics], energy: bool) -> list[SimResult]:
         lift = mech.positions[0, 2] - mech.lattice.rest_positions[0, 2] * edge
         pos[2, :, r] += lift
         pos[:, rows, r] = mech.positions.T
-        step_factor[rows, r] = mech.sim.dt / mech.sim.mass
-        params[:, slot, first_end, r] = (
-            mech.stiffness,
-            mech.rest_length,
-            mech.amp_sin,
-            mech.amp_cos,
-        )
+        step_factor[rows, r] = mech.sim.step / mech.sim.mass
+        columns = (mech.stiffness, mech.rest_length, mech.amp_sin, mech.amp_cos)
+        params[:, slot, first_end, r] = (*columns, spring_dashpots(mech))[: len(params)]
         box_rows.append(rows)
         slots.append((slot, first_end))  # each spring's slot, in spring order
     vel = np.zeros_like(pos)
@@ -319,7 +331,8 @@ def _run_group(group: list[Mechanics], energy: bool) -> list[SimResult]:
     started = time.perf_counter()
     kernels.simulate_many(
         pos[0], pos[1], pos[2], vel[0], vel[1], vel[2], step_factor, offsets,
-        params[0], params[1], params[2], params[3], *_scalars(first),
+        params[0], params[1], params[2], params[3],
+        params[4] if damped else np.zeros((0, 0, 0)), *_scalars(first),
         settle[0], settle[1], settle[2], work,
     )  # fmt: skip
     wall = (time.perf_counter() - started) / n_robots

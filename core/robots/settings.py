@@ -8,14 +8,38 @@ says why. Every value is validated on construction so a bad setting is refused b
 
 from __future__ import annotations
 
-from typing import Any
+import math
+from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from softevo.core.robots.step import critical_step
 from softevo.core.robots.terrain import Flat, Terrain
 
 #: Largest number of integration steps one simulation may take (duration / dt).
 MAX_STEPS = 20_000_000
+
+#: The physics profiles: the values a profile gives the settings that a file or request leaves
+#: out. `paper` is the paper's arithmetic (velocities times 0.99 each step at dt = 0.5 ms: a drag
+#: of 20.1 s^-1 that doubles when dt halves); `physical` gives every damping in physical units
+#: and derives the step from the stiffest material, so results converge as dt shrinks
+#: (docs/physics.md). A file without `profile` is `paper`, as every file written before it was.
+PROFILES: dict[str, dict[str, Any]] = {
+    "paper": {
+        "dt": 0.0005,
+        "damping": 0.99,
+        "drag": 0.0,
+        "material_damping": 0.0,
+        "contact_damping": 0.0,
+    },
+    "physical": {
+        "dt": None,
+        "damping": 1.0,
+        "drag": 0.5,
+        "material_damping": 1.0,
+        "contact_damping": 1.0,
+    },
+}
 
 
 class SimSettings(BaseModel):
@@ -23,11 +47,34 @@ class SimSettings(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 
-    dt: float = Field(0.0005, gt=0, le=0.01, description="integration time step (s)")
+    profile: Literal["paper", "physical"] = Field(
+        "paper", description="physics profile: the defaults of dt and the damping (PROFILES)"
+    )
+    dt: float | None = Field(
+        0.0005,
+        gt=0,
+        le=0.01,
+        description="integration time step (s); null: dt_fraction of the critical step",
+    )
+    dt_fraction: float = Field(
+        0.8, gt=0, le=1, description="dt as a fraction of the critical step when dt is null"
+    )
     duration: float = Field(10.0, gt=0, le=3600, description="simulated time (s)")
     gravity: float = Field(-9.81, ge=-1000, le=1000, description="acceleration along z (m/s^2)")
     damping: float = Field(
-        0.99, gt=0, le=1, description="factor applied to every velocity each step; 1.0 = none"
+        0.99,
+        gt=0,
+        le=1,
+        description="legacy: factor on every velocity each step (the paper's 0.99); 1.0 = none",
+    )
+    drag: float = Field(
+        0.0, ge=0, le=1e4, description="global velocity damping (s^-1), exp(-drag dt) a step"
+    )
+    material_damping: float = Field(
+        0.0, ge=0, le=10, description="damping of every spring, as a ratio to critical damping"
+    )
+    contact_damping: float = Field(
+        0.0, ge=0, le=10, description="damping of the ground contact, ratio to critical damping"
     )
     ground_stiffness: float = Field(
         10000.0, ge=0, le=1e8, description="penalty spring of the ground at z = 0 (N/m)"
@@ -60,6 +107,16 @@ class SimSettings(BaseModel):
         description="the ground: flat (default), slope, steps, rough or hurdles (docs/tasks.md)",
     )
 
+    @model_validator(mode="before")
+    @classmethod
+    def _profile_defaults(cls, data: Any) -> Any:
+        """Settings left out take their profile's values (an unknown profile is refused by the
+        field's own check)."""
+        if isinstance(data, dict):
+            defaults = PROFILES.get(data.get("profile", "paper"), {})
+            data = {**defaults, **data}
+        return data
+
     @model_validator(mode="after")
     def _check_times(self) -> SimSettings:
         if self.settle_time >= self.duration:
@@ -67,7 +124,7 @@ class SimSettings(BaseModel):
                 f"settle_time: {self.settle_time} s must be shorter than duration "
                 f"({self.duration} s)"
             )
-        steps = self.duration / self.dt  # may overflow to inf for a dt near zero
+        steps = self.duration / self.step  # may overflow to inf for a dt near zero
         if not steps <= MAX_STEPS:
             raise ValueError(
                 f"duration: duration / dt = {steps:.4g} steps, more than the limit of {MAX_STEPS}"
@@ -75,26 +132,50 @@ class SimSettings(BaseModel):
         return self
 
     @property
+    def critical_step(self) -> float:
+        """The largest stable step (s) of any voxel robot of these materials (`step`)."""
+        return critical_step(
+            max(self.soft_stiffness, self.hard_stiffness, self.actuated_stiffness),
+            self.mass,
+            self.ground_stiffness,
+            max(self.material_damping, self.contact_damping),
+        )
+
+    @property
+    def step(self) -> float:
+        """The time step used (s): `dt`, or `dt_fraction` of the critical step."""
+        return self.dt if self.dt is not None else self.dt_fraction * self.critical_step
+
+    @property
+    def velocity_factor(self) -> float:
+        """What every velocity is multiplied by each step: `damping` (per step, the paper's
+        legacy) times exp(-drag dt) (physical: the same decay per second at any dt)."""
+        if self.drag == 0.0:
+            return self.damping  # the paper's arithmetic, to the last bit
+        return self.damping * math.exp(-self.drag * self.step)
+
+    @property
     def n_steps(self) -> int:
         """Number of integration steps: duration / dt, rounded to the nearest integer."""
-        return max(1, round(self.duration / self.dt))
+        return max(1, round(self.duration / self.step))
 
     @property
     def settle_steps(self) -> int:
         """Step at which the fitness clock starts."""
-        return round(self.settle_time / self.dt)
+        return round(self.settle_time / self.step)
 
     @property
     def measured_time(self) -> float:
         """Seconds between the fitness clock's start and the end of the simulation."""
-        return (self.n_steps - self.settle_steps) * self.dt
+        return (self.n_steps - self.settle_steps) * self.step
 
 
 def sim_settings(
     overrides: dict[str, Any] | None = None, base: SimSettings | None = None
 ) -> SimSettings:
-    """Return `base` (default: the paper's settings) with `overrides` applied and validated."""
-    merged = (base or SimSettings()).model_dump()
+    """Return `base` (default: the defaults of the profile the overrides name, `paper` where
+    they name none) with `overrides` applied and validated."""
+    merged = base.model_dump() if base is not None else {}
     merged.update(overrides or {})
     return SimSettings.model_validate(merged)
 

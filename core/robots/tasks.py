@@ -1,4 +1,5 @@
-"""Task presets: a small benchmark suite on top of `paper-voxel` (4x4x4, 25 x 100, 10 s).
+"""Task presets: a small benchmark suite on top of `paper-voxel` (4x4x4, 25 x 100, 10 s), in
+the `physical` physics profile (damping in physical units, a step derived from the materials).
 
 Each task is a terrain and the objective that fits it; everything else is the paper's phase 3,
 so a task's runs differ from `paper-voxel` only in where the robot is and what it is scored by.
@@ -46,6 +47,10 @@ TASKS: dict[str, tuple[str, dict[str, Any], str]] = {
 def task_presets(base: dict[str, Any]) -> dict[str, dict[str, Any]]:
     """The tasks as presets: `base` (paper-voxel) with the task's terrain and objective."""
     return {
-        name: {**base, "sim": {**base.get("sim", {}), "terrain": terrain}, "objective": objective}
+        name: {
+            **base,
+            "sim": {**base.get("sim", {}), "profile": "physical", "terrain": terrain},
+            "objective": objective,
+        }
         for name, (_, terrain, objective) in TASKS.items()
     }

@@ -30,7 +30,7 @@ def breathing_cube(out: Path, quick: bool) -> dict[str, Any]:
     robot = parse_robot(json.loads(shipped_robot_text("breathing_cube.json")))
     if quick:
         robot = with_sim(robot, duration=2.0)
-    result, trajectory = simulate(robot, record_every=max(1, round(1 / (100 * robot.sim.dt))))
+    result, trajectory = simulate(robot, record_every=max(1, round(1 / (100 * robot.sim.step))))
     assert trajectory is not None
     heights = trajectory.frames[:, :, 2].mean(axis=1)
     xs = trajectory.frames[:, :, 0].mean(axis=1)

@@ -28,7 +28,7 @@ def test_a_pinned_spring_driven_sinusoidally_does_the_closed_form_work() -> None
     kernels.simulate_one(
         x, y, z, zeros.copy(), zeros.copy(), zeros.copy(), np.zeros(2),  # pinned: step factor 0
         np.array([0]), np.array([1]), np.array([k]), np.array([length]), np.array([a]),
-        np.array([0.0]), omega, dt, steps, -0.981, 1e4, 0.6, 0.99, kind, params,
+        np.array([0.0]), np.zeros(0), omega, dt, steps, -0.981, 1e4, 0.0, 0.6, 0.99, kind, params,
         settle_step, np.empty(2), np.empty(2), np.empty(2), 0, np.empty((0, 3, 2)), work,
     )  # fmt: skip
     expected = k * a * a * omega * (duration - settle) / math.pi
