@@ -448,7 +448,8 @@ def test_a_robot_whose_integration_diverged_is_unstable_not_fast() -> None:
 
     request = {"preset": "quick", "seed": 4, "population": 16, "generations": 1}
     for dt, diverges in ((0.003, True), (0.0005, False)):
-        config = resolve({**request, "sim": {"duration": 1.5, "settle_time": 0.3, "dt": dt}})
+        sim = {"profile": "paper", "duration": 1.5, "settle_time": 0.3, "dt": dt}
+        config = resolve({**request, "sim": sim})
         evolution = Evolution.start(config)
         robots = [evolution.robot(item) for item in evolution.individuals()]
         results = simulate_batch(robots)

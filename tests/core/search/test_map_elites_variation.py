@@ -25,7 +25,7 @@ BOUNDS = np.array([[-1.0, 1.0], [-2.0, 2.0], [0.0, 10.0]])
 PINNED_RUN = {
     "preset": "quick", "algorithm": "map-elites", "descriptors": ["voxels", "actuated"],
     "bins": [4, 4], "population": 6, "generations": 3, "seed": 3,
-    "sim": {"duration": 1.0, "settle_time": 0.5},
+    "sim": {"profile": "paper", "duration": 1.0, "settle_time": 0.5},
 }  # fmt: skip
 PINNED_CURVE = "02371943c7bdcf2467f562cb62459aa98458c9598cac3d5f08ed29b4c8d4dafa"
 PINNED_ARCHIVE = "29cf7cc5db791b4850b450d02dc2a2767455ed727f10dc68a6dbb7f5463c1845"
