@@ -49,6 +49,12 @@ def test_a_run_without_objectives_has_no_front_and_bad_ones_are_named(
 ) -> None:
     plain = client.post("/runs", json={**RUN, "objectives": [], "generations": 1}).json()["id"]
     assert client.get(f"/runs/{plain}/front").status_code == 404
+    # the runs list carries what the dashboard's columns show (issue 48): algorithm, encoding,
+    # objectives and task, in each run's resolved config
+    listed = {run["id"]: run["config"] for run in client.get("/runs").json()["items"]}
+    assert listed[plain]["algorithm"] == "nsga2" and listed[plain]["encoding"] == "voxel"
+    assert not listed[plain].get("objectives") and listed[plain]["objective"] == "speed"
+    assert listed[plain]["sim"]["terrain"]["kind"] == "flat"
     response = client.post("/runs", json={**RUN, "objectives": ["speed", "sped"]})
     assert response.status_code == 422
     assert "objectives: item 1: unknown measure 'sped'" in response.text

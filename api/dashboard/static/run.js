@@ -1,9 +1,10 @@
 // One run, live: its curve, population dot plot, diversity and the 3D replay of the best robot.
 import { CURVE_SERIES, GENERATION_AXIS, api, box, chart, duration, fmt, h, objective, onLeave, progressBar, softevo, status, terrainText, view } from "./api.js";
 import { ArchiveMap } from "./archive.js";
-import { frontPanel } from "./front.js";
+import { frontPanel, hypervolumeChart } from "./front.js";
 import { Replay } from "./replay.js";
 import { cancelButton } from "./runs.js";
+import { measureLabel } from "./units.js";
 
 const FINISHED = ["completed", "failed", "cancelled"];
 
@@ -28,8 +29,9 @@ export async function runView(runId) {
   onLeave(() => page.replay.dispose());
   qualityDiversity(page);
   if (page.archive) await page.archive.update();
-  page.front = frontPanel(page.run, page.charts, page.replay, page.replayPanel);
+  page.front = frontPanel(page.run, page.charts, page.replay, page.replayPanel, () => page.individuals);
   if (page.front) await page.front.update();
+  page.hypervolume = hypervolumeChart(page.run, page.curve, page.charts);
   if (page.run.progress.best_fitness !== null) {
     await showBest(page);
   } else {
@@ -46,11 +48,23 @@ function layout(page) {
   page.replayPanel = h("div", { class: "panel", id: "replay" });
   const settings = h("pre", { class: "settings" }, JSON.stringify(run.config, null, 2));
   view.replaceChildren(
-    h("h2", {}, `Run #${runId}`, " ", h("span", { class: "muted" }, `${run.preset || "custom"}, ${box(run.config.shape)}, seed ${run.seed}`)),
-    h("p", { class: "muted", id: "task" }, `task: ${terrainText(run.config)} terrain, fitness = ${page.fitness.label}`),
+    h("h2", {}, `Run #${runId}`, " ", h("span", { class: "muted" },
+      `${run.preset || "custom"}, ${run.config.algorithm || "ga"}, ${run.config.encoding || "voxel"}, ${box(run.config.shape)}, seed ${run.seed}`)),
+    h("p", { class: "muted", id: "task" }, taskLine(run.config, page.fitness)),
     page.summary, page.charts,
     h("div", { class: "grid" }, page.replayPanel,
       h("div", { class: "panel" }, h("h3", {}, "Settings"), settings)));
+}
+
+// What the run is after: its terrain and either its objectives (the curve and the dot plot show
+// the fitness beside them) or its fitness, with a quality-diversity run's descriptors.
+function taskLine(config, fitness) {
+  const terrain = `task: ${terrainText(config)} terrain`;
+  const objectives = config.objectives || [];
+  const goal = (o) => `${measureLabel(o.measure)}, ${o.goal === "max" ? "higher" : "lower"} is better`;
+  if (objectives.length) return `${terrain}, objectives: ${objectives.map(goal).join("; ")} (curve and dots: ${fitness.label})`;
+  const descriptors = config.descriptors || [];
+  return `${terrain}, fitness = ${fitness.label}` + (descriptors.length ? `, descriptors: ${descriptors.join(", ")}` : "");
 }
 
 // The summary line, its error and links; returns the function that shows `page.run` in it.
@@ -134,8 +148,11 @@ function dotChart(page) {
     cursor: { drag: { x: false, y: false } },
     axes: [GENERATION_AXIS, { label: fitness.label, size: 60 }],
     series: [{ label: "generation", value: (u, v) => (v === null ? "–" : Math.round(v)) },
-      { label: fitness.name, stroke: "#2f6fb5", paths: () => null, points: { show: true, size: 4, fill: "#2f6fb5" } },
-      { label: "failed", stroke: "#c0392b", paths: () => null, points: { show: true, size: 6, fill: "#c0392b" } }],
+      { label: fitness.name, stroke: "#2f6fb5", paths: () => null, points: { show: true, size: 4, fill: "#2f6fb5" },
+        value: (u, v) => (v === null || v === undefined ? "–" : v.toFixed(3)) },
+      // not the hovered robot's 0 or nothing: how many failed of all drawn, always readable
+      { label: "failed", stroke: "#c0392b", paths: () => null, points: { show: true, size: 6, fill: "#c0392b" },
+        value: () => `${softevo.failedDots ?? 0} of ${softevo.dots ?? 0}` }],
   }, dotData(page), page.charts);
   // capture phase on the root: uPlot stops the click's propagation on its plotting area
   dotPlot.root.addEventListener("click", (event) => replayClicked(page, event), true);
@@ -231,6 +248,7 @@ async function update(page) {
   page.dotPlot.setData(dotData(page));
   page.diversityPlot.setData(diversityData(page));
   for (const [key, plot] of page.qdCharts) plot.setData(qdData(page, key));
+  if (page.hypervolume) page.hypervolume.show(page.curve);
   if (page.archive) await page.archive.update();
   if (page.front) await page.front.update();
   // follow the fastest robot as it changes, unless the user picked an individual; the

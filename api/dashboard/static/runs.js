@@ -1,5 +1,6 @@
 // The list of runs: status, progress, best speed; start one from a preset, cancel one.
-import { api, box, fmt, h, objective, onLeave, progressBar, softevo, status, view } from "./api.js";
+import { api, box, fmt, h, objective, onLeave, progressBar, softevo, status, terrainText, view } from "./api.js";
+import { measureLabel, objectiveShort } from "./units.js";
 import { sweepsPanel } from "./sweeps.js";
 
 export async function runsView() {
@@ -41,23 +42,44 @@ export async function runsView() {
   async function refresh() {
     const page = await api("/runs?limit=100");
     table.replaceChildren(
-      h("tr", {}, ["run", "", "status", "progress", "best fitness", "preset", "box", "seed", "sweep", ""].map((t) => h("th", {}, t))),
+      h("tr", {}, COLUMNS.map((t) => h("th", {}, t))),
       ...page.items.map((run) => h("tr", { "data-run": run.id },
         h("td", {}, h("a", { href: `#/runs/${run.id}` }, `#${run.id}`)),
         h("td", { class: "thumb" }, thumbnail(run)),
         h("td", {}, status(run.status)),
         h("td", {}, progressBar(run.progress.generation, run.progress.generations)),
+        ...searchCells(run.config),
         h("td", { class: "num" }, `${fmt(run.progress.best_fitness)} ${objective(run.config).unit}`),
         h("td", {}, run.preset || "–"),
         h("td", {}, box(run.config.shape)),
         h("td", { class: "num" }, run.seed),
         h("td", {}, run.sweep_id ? h("a", { href: `#/sweeps/${run.sweep_id}` }, `sweep ${run.sweep_id}`) : "–"),
         h("td", {}, ["queued", "running"].includes(run.status) ? cancelButton(run.id, refresh) : ""))));
-    if (!page.items.length) table.append(h("tr", {}, h("td", { colspan: 10, class: "muted" }, "No runs yet: start one above.")));
+    if (!page.items.length) table.append(h("tr", {}, h("td", { colspan: COLUMNS.length, class: "muted" }, "No runs yet: start one above.")));
   }
   await Promise.all([refresh(), sweeps.refresh()]);
   const timer = setInterval(() => Promise.all([refresh(), sweeps.refresh()]).catch(() => {}), 2000);
   onLeave(() => clearInterval(timer));
+}
+
+const COLUMNS = ["run", "", "status", "progress", "algorithm", "encoding", "objectives", "task",
+  "best fitness", "preset", "box", "seed", "sweep", ""];
+
+// What a run searches with and for: its algorithm (a quality-diversity run's descriptors with
+// it), encoding, objectives (↑ maximised, ↓ minimised; the fitness alone for a run without) and
+// task (terrain / the fitness's objective), so an nsga2 run and a map-elites one tell apart.
+function searchCells(config) {
+  const descriptors = config.descriptors || [], objectives = config.objectives || [];
+  const fitness = objective(config);
+  const goals = objectives.map((o) => `${measureLabel(o.measure)}, ${o.goal === "max" ? "maximised" : "minimised"}`);
+  return [
+    h("td", { class: "algorithm" }, config.algorithm || "ga",
+      descriptors.length ? h("span", { class: "muted" }, ` (${descriptors.join(" × ")})`) : ""),
+    h("td", { class: "encoding" }, config.encoding || "voxel"),
+    h("td", { class: "objectives", title: objectives.length ? goals.join("; ") : fitness.label },
+      objectives.length ? objectives.map(objectiveShort).join(", ") : fitness.name),
+    h("td", { class: "task" }, `${terrainText(config)} / ${fitness.name}`),
+  ];
 }
 
 // A small picture of the run's best robot at rest; the URL names the best's generation, so a new

@@ -1,5 +1,7 @@
 """The dashboard's Pareto front (issue 36): a run with objectives shows the scatter of its
-front, the same points as `GET /runs/{id}/front`, and a click on a point replays that robot."""
+front, the same points as `GET /runs/{id}/front`, and a click on a point replays that robot.
+Issue 48: the front is drawn over every robot evaluated, the page names the objectives, the
+hypervolume is charted over the simulations run, and the runs list says the algorithm."""
 
 from __future__ import annotations
 
@@ -43,3 +45,31 @@ def test_an_nsga2_run_shows_its_front_and_replays_a_picked_point(
         timeout=15000,
     )
     shot(page, "dashboard-front")
+    readable(page, server, run_id)
+
+
+def readable(browser: Any, service: httpx.Client, run_id: int) -> None:
+    """What issue 48 asked of the page of an nsga2 run and of the runs list."""
+    task = browser.text_content("#task")
+    assert "objectives: speed (m/s), higher is better" in task and "fitness =" not in task
+    assert "cost of transport (dimensionless), lower is better" in task
+    assert "nsga2" in browser.text_content("h2")
+    listed = service.get(f"/runs/{run_id}/individuals", params={"limit": 1000}).json()["items"]
+    measured = [i for i in listed if i["fitness"] is not None and i["operator"] != "survivor"]
+    assert browser.evaluate("window.softevo.frontDots") == len(measured)
+    curve = service.get(f"/runs/{run_id}/curve").json()["generations"]
+    spent = [sum(r["evaluations"] for r in curve[: g + 1]) for g in range(len(curve))]
+    assert browser.evaluate("window.softevo.charts.hypervolume.data[0]") == spent
+    volumes = browser.evaluate("window.softevo.charts.hypervolume.data[1]")
+    assert volumes == [r["hypervolume"] for r in curve]
+    legend = "[...document.querySelectorAll('#population .u-series')].map(s => s.textContent)"
+    assert browser.evaluate(legend)[-1] == f"failed0 of {len(listed)}"  # a value, not clipped
+    browser.goto(f"{browser.base}/#/")
+    row = f"tr[data-run='{run_id}']"
+    browser.wait_for_selector(row)
+    assert browser.text_content(f"{row} td.algorithm") == "nsga2"
+    assert browser.text_content(f"{row} td.encoding") == "voxel"
+    assert browser.text_content(f"{row} td.objectives") == "speed ↑, cost of transport ↓"
+    assert browser.text_content(f"{row} td.task") == "flat / speed"
+    headers = browser.eval_on_selector_all("#runs th", "cells => cells.map(c => c.textContent)")
+    assert {"algorithm", "encoding", "objectives", "task"} <= set(headers)
