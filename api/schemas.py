@@ -39,10 +39,13 @@ Number = Annotated[float, Field(strict=True)]
 
 
 def _sim_field(name: str, info: Any) -> Any:
-    """A simulation setting as a body field: optional, a strict number with its bounds, or the
-    terrain (validated as a terrain alone, so its errors name its own fields)."""
+    """A simulation setting as a body field: optional, a strict number with its bounds, the
+    physics profile, or the terrain (validated as a terrain alone, so its errors name its own
+    fields). A `dt` left out or null is the profile's (derived in `physical`)."""
     if name == "terrain":
         return (Terrain | None, Field(None, description=info.description))
+    if name == "profile":
+        return (info.annotation | None, Field(None, description=info.description))
     annotation = Annotated[float, *info.metadata, Field(strict=True)]
     return (annotation | None, Field(None, description=info.description))
 

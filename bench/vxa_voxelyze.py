@@ -1,5 +1,5 @@
 """Exported robots in evosoro's Voxelyze against softevo: `SOFTEVO_VOXELYZE=/path/to/voxelyze
-python bench/vxa_voxelyze.py [--boxes 1|2pi|both]`.
+python bench/vxa_voxelyze.py [--boxes 1|2pi|both] [--profile paper|physical]`.
 
 The binary is evosoro's command-line Voxelyze (skriegman/evosoro, `evosoro/_voxcad/Voxelyze`
 then `evosoro/_voxcad/voxelyzeMain`); softevo neither ships nor builds it (docs/export.md says
@@ -38,12 +38,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from profiles import in_profile
 from scipy.stats import spearmanr
 
 from softevo.core.outputs.export import ExportError, export_robot
 from softevo.core.physics import simulate
 from softevo.core.robots.robot import Robot, VoxelRobot, build_mechanics
 from softevo.core.robots.robot_file import load_robot
+from softevo.core.robots.settings import PROFILES
 
 ROOT = Path(__file__).resolve().parent.parent
 BOXES = ("3x3x6", "4x4x3", "4x4x4", "5x5x3", "5x5x4", "5x5x5", "6x6x3", "6x6x6", "9x9x2")
@@ -242,7 +244,8 @@ def co_designed(crawler: VoxelRobot) -> VoxelRobot:
     )  # fmt: skip
 
 
-def robots(boxes: str) -> list[tuple[str, Robot]]:
+def robots(boxes: str, profile: str | None) -> list[tuple[str, Robot]]:
+    """The examples and champions, in `profile` where one is given (else as their files say)."""
     chosen = [(name, load_robot(ROOT / "examples" / f"{name}.json")) for name in EXAMPLES]
     chosen.append(("crawler_4x4x4 voxel-phase (seed 40)", co_designed(chosen[1][1])))
     folder = ROOT / "docs" / "experiments"
@@ -250,7 +253,9 @@ def robots(boxes: str) -> list[tuple[str, Robot]]:
         chosen += [(f"best {b} (1 rad/s)", load_robot(folder / f"best_{b}.json")) for b in BOXES]
     if boxes in ("2pi", "both"):
         chosen += [(f"best {b} (2 pi)", load_robot(folder / f"best_fast_{b}.json")) for b in BOXES]
-    return chosen
+    if profile is None:
+        return chosen
+    return [(name, in_profile(robot, profile)) for name, robot in chosen]
 
 
 def rank_correlations(rows: list[Row]) -> list[str]:
@@ -266,13 +271,14 @@ def rank_correlations(rows: list[Row]) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--boxes", choices=("1", "2pi", "both"), default="both")
+    parser.add_argument("--profile", choices=tuple(PROFILES), help="re-set every robot in it")
     args = parser.parse_args(argv)
     binary = os.environ.get("SOFTEVO_VOXELYZE", "")
     if not binary or not os.access(binary, os.X_OK):
         print("vxa_voxelyze: set SOFTEVO_VOXELYZE to evosoro's voxelyze binary", file=sys.stderr)
         return 2
     rows, notes = [], []
-    for name, robot in robots(args.boxes):
+    for name, robot in robots(args.boxes, args.profile):
         outcome = compare(binary, name, robot)
         (notes if isinstance(outcome, str) else rows).append(outcome)
         print(outcome if isinstance(outcome, str) else f"{name}: done", file=sys.stderr)

@@ -202,7 +202,10 @@ def _default_map(merged: dict[str, Any], request: dict[str, Any]) -> None:
 
 
 def resolve(request: dict[str, Any]) -> RunConfig:
-    """Merge a preset with overrides and validate; ConfigError names the offending field."""
+    """Merge a preset with overrides and validate; ConfigError names the offending field.
+
+    A `sim` that sets the legacy per-step `damping` and names no profile is read in the `paper`
+    profile: so is every config stored before profiles existed (they list every setting)."""
     if not isinstance(request, dict):
         raise ConfigError(f"run config: expected an object, got {type(request).__name__}")
     preset = request.get("preset", "paper-voxel")
@@ -223,6 +226,8 @@ def resolve(request: dict[str, Any]) -> RunConfig:
     sim_overrides = request.get("sim", {})
     if not isinstance(sim_overrides, dict):
         raise ConfigError("sim: expected an object of simulation settings")
+    if "damping" in sim_overrides and "profile" not in sim_overrides:
+        sim_overrides = {"profile": "paper", **sim_overrides}  # the legacy per-step damping
     merged["sim"] = {**PRESETS[preset].get("sim", {}), **sim_overrides}
     try:
         return RunConfig.model_validate(merged)

@@ -49,9 +49,12 @@ FITNESS_FILE = "softevo_fitness.xml"
 TRACES_PER_PERIOD = 50
 #: Most empty layers written under a robot for its drop height (each is X*Y numbers per layer).
 MAX_DROP_LAYERS = 1000
-#: Voxelyze's bond damping ratio (1 = critical): the published examples' value; softevo has no
-#: damping of its own inside the body, but the engine needs this to stay stable (docs/export.md).
+#: Voxelyze's bond damping ratio (1 = critical) for a robot whose springs are undamped (the paper
+#: profile): the published examples' value, which the engine needs to stay stable; a robot with
+#: `material_damping` exports that ratio instead (docs/export.md).
 BOND_DAMPING_Z = 1.0
+#: Voxelyze's floor damping ratio for a robot without `contact_damping`: evosoro's value.
+COL_DAMPING_Z = 0.8
 #: Names given to the materials, in the style of the published examples.
 MATERIAL_NAMES = {
     "soft": "Passive_Soft",
@@ -137,15 +140,15 @@ def _simulator(xml: _Xml, sim: SimSettings, slow_damping_z: float) -> None:
     xml.open("Simulator")
     xml.comment(
         f"Voxelyze picks its own stable time step (DtFrac); softevo's dt = {_number(sim.step)} s. "
-        f"SlowDampingZ matches softevo's velocity factor {_number(sim.damping)} per step"
+        f"SlowDampingZ matches softevo's velocity factor {_number(sim.velocity_factor)} per step"
     )
     xml.open("Integration")
     xml.leaf("Integrator", 0)
     xml.leaf("DtFrac", 0.95)
     xml.close("Integration")
     xml.open("Damping")
-    xml.leaf("BondDampingZ", BOND_DAMPING_Z)
-    xml.leaf("ColDampingZ", 0.8)
+    xml.leaf("BondDampingZ", sim.material_damping or BOND_DAMPING_Z)
+    xml.leaf("ColDampingZ", sim.contact_damping or COL_DAMPING_Z)
     xml.leaf("SlowDampingZ", slow_damping_z)
     xml.close("Damping")
     xml.open("StopCondition")

@@ -123,10 +123,11 @@ def structure_layers(actuation: VoxelActuation, duration: float) -> dict[str, np
 def slow_damping(robot: VoxelRobot, moduli: np.ndarray, voxel_mass: float) -> float:
     """SlowDampingZ: Voxelyze pulls each voxel's velocity toward 0 with the force
     -SlowDampingZ 2 sqrt(M E L) v, a decay rate 2 SlowDampingZ sqrt(E L / M); softevo multiplies
-    every velocity by `damping` each step, a rate -ln(damping) / dt. Matched for the mean
-    sqrt(E) of the robot's voxels (one number for all; stiffer voxels are damped more there)."""
+    every velocity by `velocity_factor` each step (the legacy `damping` and `drag`), a rate
+    -ln(factor) / dt. Matched for the mean sqrt(E) of the robot's voxels (one number for all;
+    stiffer voxels are damped more there)."""
     sim = robot.sim
-    rate = -math.log(sim.damping) / sim.step
+    rate = -math.log(sim.velocity_factor) / sim.step
     mean_root = float(np.mean(np.sqrt(moduli * sim.edge_length / voxel_mass)))
     return rate / (2 * mean_root) if mean_root > 0 else 0.0
 
