@@ -128,7 +128,7 @@ export class FrontScatter {
     softevo.frontDots = placed.dots.length;  // for tests
     softevo.frontScales = [placed.sx.kind, placed.sy.kind];
     this.caption.textContent = `${points.length} robots on the front (red) of the ${placed.dots.length} evaluated ` +
-      `(grey), generation ${this.data.generations}` + (off.length ? `; ${off.length} beyond an axis, drawn on its edge (blue squares)` : "");
+      `(grey) after ${this.data.generations} generations` + (off.length ? `; ${off.length} beyond an axis, drawn on its edge (blue squares)` : "");
   }
 
   // frame, grid, tick labels and the axes' names
@@ -202,7 +202,7 @@ export function hypervolumeChart(run, curve, parent) {
   let generations = [];
   const atGeneration = (u, v, s, i) => (v === null || i === null || i === undefined ? "–" : `${v} (generation ${generations[i]})`);
   const plot = chart("hypervolume", `Hypervolume of the front so far (${unitText}; reference point: ${reference})`, {
-    scales: { x: { time: false }, y: { range: (u, min, max) => [0, Math.max(max * 1.05, 1e-9)] } },
+    scales: { x: { time: false, range: (u, min, max) => [0, Math.max(max, 1)] }, y: { range: (u, min, max) => [0, Math.max(max * 1.05, 1e-9)] } },
     axes: [{ label: "simulations run (cumulative)" }, { label: `hypervolume (${unitText})`, size: 70 }],
     series: [{ label: "simulations", value: atGeneration },
       { label: "hypervolume", stroke: "#2f6fb5", width: 1.5, paths: uPlot.paths.stepped({ align: 1 }),
