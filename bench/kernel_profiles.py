@@ -39,8 +39,9 @@ simulate_batch(mechs[:2]); simulate(mechs[0])
 started = time.perf_counter(); simulate_batch(mechs); batch = time.perf_counter() - started
 started = time.perf_counter(); simulate(mechs[0]); alone = time.perf_counter() - started
 springs = sum(m.n_springs for m in mechs) * sim.n_steps
+dt = getattr(sim, "step", None) or sim.dt  # a tree before profiles has dt alone
 print(json.dumps({"batched": springs / batch, "alone": mechs[0].n_springs * sim.n_steps / alone,
-                  "dt": sim.step}))
+                  "dt": dt}))
 """
 PAPER = {"duration": 2.0}
 PHYSICAL = {"profile": "physical", "duration": 2.0}

@@ -66,9 +66,14 @@ if len(sys.argv) > 2:  # a staged tree: its own strategies, not the installed ch
     from staged import own_strategies
     own_strategies(Path(sys.argv[2]))
 from softevo import library
+PROFILE_SETTINGS = ("profile", "drag", "material_damping", "contact_damping", "dt_fraction")
 result = library.evolve(json.loads(sys.argv[1]), workers=1)
 digest = lambda value: hashlib.sha256(json.dumps(value, sort_keys=True).encode()).hexdigest()[:16]
-print(json.dumps({"curve": digest(result.curve), "best": digest(result.best),
+best = result.best
+if best and best.get("sim", {}).get("profile", "paper") == "paper":  # the paper's own settings:
+    sim = {k: v for k, v in best["sim"].items() if k not in PROFILE_SETTINGS}  # those of a tree
+    best = {**best, "sim": sim}  # before profiles, whose values in this profile are its zeros
+print(json.dumps({"curve": digest(result.curve), "best": digest(best),
                   "archive": digest(result.archive), "last": result.curve[-1]}))
 """
 
@@ -102,8 +107,12 @@ def compare_trees(old: Path, new: Path | None) -> int:
             after = run(config, against)
             same = all(before[key] == after[key] for key in ("curve", "best", "archive"))
             differences += not same
-            print(f"{name:16} {'same' if same else 'DIFFERENT'}  curve {after['curve']}  "
-                  f"best so far {after['last']['best_so_far']!r}")  # fmt: skip
+            differ = [key for key in ("curve", "best", "archive") if before[key] != after[key]]
+            verdict = "same" if same else "DIFFERENT " + ",".join(differ)
+            print(
+                f"{name:16} {verdict}  curve {after['curve']}  "
+                f"best so far {after['last']['best_so_far']!r}"
+            )
     finally:
         for folder in (staged, against):
             if folder is not None:
