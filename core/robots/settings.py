@@ -13,7 +13,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from softevo.core.robots.step import critical_step
+from softevo.core.robots.step import critical_step, sure_unstable_step
 from softevo.core.robots.terrain import Flat, Terrain
 
 #: Largest number of integration steps one simulation may take (duration / dt).
@@ -124,6 +124,12 @@ class SimSettings(BaseModel):
                 f"settle_time: {self.settle_time} s must be shorter than duration "
                 f"({self.duration} s)"
             )
+        if self.dt is not None and self.dt > self.sure_unstable_step:
+            raise ValueError(
+                f"dt: {self.dt} s is past the stability limit {self.sure_unstable_step:.3g} s "
+                f"of one spring of the stiffest material between two masses; leave dt out in "
+                f"the physical profile (derived from the materials) or lower it"
+            )
         steps = self.duration / self.step  # may overflow to inf for a dt near zero
         if not steps <= MAX_STEPS:
             raise ValueError(
@@ -139,6 +145,16 @@ class SimSettings(BaseModel):
             self.mass,
             self.ground_stiffness,
             max(self.material_damping, self.contact_damping),
+        )
+
+    @property
+    def sure_unstable_step(self) -> float:
+        """A step past which any robot with a spring of the stiffest material blows up
+        (`step.sure_unstable_step`): a hand-set dt beyond it is refused."""
+        return sure_unstable_step(
+            max(self.soft_stiffness, self.hard_stiffness, self.actuated_stiffness),
+            self.mass,
+            self.material_damping,
         )
 
     @property

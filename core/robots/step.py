@@ -32,6 +32,14 @@ def critical_step(k_max: float, mass: float, ground_k: float, zeta: float) -> fl
     return damped_limit(zeta) / math.sqrt(omega_sq)
 
 
+def sure_unstable_step(k_max: float, mass: float, zeta: float) -> float:
+    """The step (s) past which one spring of `k_max` between two masses of `mass` is unstable:
+    that spring's own mode has w^2 = 2 k / m, and a lattice's highest w is at least any of its
+    springs' (a Rayleigh quotient), so no robot holding such a spring survives a longer step."""
+    omega_sq = 2.0 * k_max / mass
+    return math.inf if omega_sq <= 0.0 else damped_limit(zeta) / math.sqrt(omega_sq)
+
+
 def spring_damping(stiffness: float, mass: float, zeta: float) -> float:
     """The dashpot (N s/m) of a spring between two masses of `mass` at damping ratio `zeta`:
     2 zeta sqrt(k mu), mu = mass / 2 the pair's reduced mass (as Voxelyze's bond zeta)."""
