@@ -46,6 +46,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     from softevo.core.robots.robot_file import RobotFileError
 
     fps = args.fps if args.trajectory else None
+    if args.trajectory:
+        _check_out(args.trajectory)
     try:
         measures = library.simulate(
             args.robot, duration=args.duration, terrain=args.terrain, trajectory_fps=fps
@@ -73,6 +75,30 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_out(path: str) -> None:
+    """Say that `path` cannot be written before simulating or drawing anything, not after."""
+    out = Path(path)
+    folder = out.parent
+    if out.is_dir():
+        reason = "a folder"
+    elif not folder.is_dir():
+        reason = f"no folder {folder}" if not folder.exists() else f"{folder} is not a folder"
+    elif not os.access(folder, os.W_OK | os.X_OK):
+        reason = f"folder {folder} is not writable"
+    else:
+        return
+    raise CommandError(f"{path}: cannot write ({reason})")
+
+
+def _not_a_folder(args: argparse.Namespace, example: str, formats: str) -> None:
+    """--out naming a folder: say so and what it takes (a file, its suffix the format)."""
+    if Path(args.out).is_dir():
+        args.parser.error(
+            f"--out {args.out} is a folder: give the file to write, e.g. "
+            f"{Path(args.out) / example} (its suffix names the format: {formats})"
+        )
+
+
 def _write_file(path: str, data: bytes, format: str) -> int:
     """Write an exported or rendered file and say so on stderr (stdout stays free)."""
     try:
@@ -87,6 +113,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
     from softevo.core.outputs.export import ExportError, export_robot, format_from_path
     from softevo.core.robots.robot_file import RobotFileError, load_robot
 
+    _not_a_folder(args, "robot.glb", ", ".join(f".{name}" for name in FORMATS))
     named = format_from_path(args.out)
     if args.format and named and args.format != named:
         args.parser.error(f"--format {args.format} but --out {args.out!r} names {named}: say one")
@@ -95,6 +122,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
         args.parser.error(
             f"--format is needed: the suffix of {args.out!r} names no format ({', '.join(FORMATS)})"
         )
+    _check_out(args.out)
     try:
         robot = load_robot(args.robot)
     except RobotFileError as error:
@@ -137,20 +165,41 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     from softevo.core.outputs import picture
     from softevo.core.robots.robot_file import RobotFileError, load_robot
 
+    _not_a_folder(args, "robot.gif", ".gif or .mp4")
     format = Path(args.out).suffix.lower().lstrip(".")
     if format not in picture.PICTURE_FORMATS:
         args.parser.error(f"--out must end in .gif or .mp4, got {args.out!r}")
+    if format == "mp4" and not picture.ffmpeg_available():
+        raise CommandError(picture.FFMPEG_MISSING)  # not the robot's fault: said before reading it
+    _check_picture_options(args)
+    _check_out(args.out)
     try:
         robot = load_robot(args.robot)
     except RobotFileError as error:
         raise CommandError(f"{args.robot}: {error}") from None
     try:
         seconds = args.duration if args.duration is not None else picture.one_period(robot)
-        picture.check(args.fps, seconds)
         data = picture.movie(robot, format, args.fps, seconds)
     except picture.PictureError as error:
         raise CommandError(f"{args.robot}: {error}") from None
     return _write_file(args.out, data, format)
+
+
+def _check_picture_options(args: argparse.Namespace) -> None:
+    """--fps and --duration out of range: a usage error naming the option, before the robot is
+    read (argparse has already refused values that are not finite numbers > 0)."""
+    from softevo.core.limits import MAX_PICTURE_FPS, MAX_PICTURE_SECONDS, MIN_PICTURE_FPS
+
+    if not MIN_PICTURE_FPS <= args.fps <= MAX_PICTURE_FPS:
+        args.parser.error(
+            f"--fps must be between {MIN_PICTURE_FPS:g} and {MAX_PICTURE_FPS:g} frames per "
+            f"simulated second, got {args.fps:g}"
+        )
+    if args.duration is not None and args.duration > MAX_PICTURE_SECONDS:
+        args.parser.error(
+            f"--duration must be at most {MAX_PICTURE_SECONDS:g} simulated seconds, "
+            f"got {args.duration:g}"
+        )
 
 
 def _add_replay(commands: Any) -> None:

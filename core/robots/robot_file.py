@@ -44,6 +44,7 @@ from pydantic import (
 
 from softevo.core.limits import MAX_FILE_BYTES, MAX_SIDE, MAX_VOXELS
 from softevo.core.objectives import Objective
+from softevo.core.robots.not_a_robot import what_else
 from softevo.core.robots.robot import (
     ACTUATED_LABELS,
     GENE_BOUNDS,
@@ -181,6 +182,9 @@ def parse_robot(data: Any) -> Robot:
     """Validate a decoded robot file and build the robot it describes."""
     if not isinstance(data, dict):
         raise RobotFileError(f"robot file: expected a JSON object, got {type(data).__name__}")
+    other = what_else(data, _RobotModel.model_fields)
+    if other is not None:
+        raise RobotFileError(f"{other}, not a robot file ({FORMAT})")
     if "format" in data and data["format"] != FORMAT:
         raise _refuse("format", f"expected {FORMAT!r}, got {data['format']!r}")
     try:
@@ -270,7 +274,17 @@ def load_robot(path: str | Path) -> Robot:
         raise RobotFileError("JSON nested too deeply") from None
     except ValueError as error:
         raise RobotFileError(str(error)) from None
+    other = what_else(data, _RobotModel.model_fields) if isinstance(data, dict) else None
+    if other is not None:
+        raise RobotFileError(f"{other}, not a robot file ({FORMAT}): {_robot_hint(path)}")
     return parse_robot(data)
+
+
+def _robot_hint(path: Path) -> str:
+    """Where the robot is when a run folder's other file was given instead of it."""
+    if (path.parent / RESULTS_ROBOT).is_file():
+        return f"the run's robot is {path.parent / RESULTS_ROBOT} (or give the folder)"
+    return f"give a robot file, or a `softevo run` results folder (its {RESULTS_ROBOT})"
 
 
 def _refuse_constant(name: str) -> float:

@@ -66,7 +66,7 @@ def test_bad_robot_file_is_one_line(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize(
     ("option", "value", "said"),
-    [("--fps", "100", "fps must be"), ("--duration", "999", "duration must be")],
+    [("--fps", "100", "--fps must be"), ("--duration", "999", "--duration must be")],
 )
 def test_out_of_range_fps_or_duration_is_one_line(
     examples: Path, tmp_path: Path, option: str, value: str, said: str
@@ -75,7 +75,7 @@ def test_out_of_range_fps_or_duration_is_one_line(
         "replay", str(examples / "crawler_4x4x4.json"), "--out", str(tmp_path / "a.gif"),
         option, value,
     )  # fmt: skip
-    assert done.returncode == 1 and said in done.stderr and done.stderr.count("\n") == 1
+    assert done.returncode == 2 and said in done.stderr and done.stderr.count("\n") == 1
 
 
 def test_non_positive_fps_is_a_usage_error(examples: Path, tmp_path: Path) -> None:
