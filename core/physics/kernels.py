@@ -53,39 +53,15 @@ from numba import njit
 
 from softevo.core.physics.contact import contact_pass, contact_scratch
 from softevo.core.physics.jit import JIT
+from softevo.core.physics.springs import (
+    actuator_power,
+    damped_spring_force,
+    length,
+    spring_force,
+)
 
-#: Smallest spring length divided by (guards a collapsed or padding spring against 0 / 0).
-D_MIN = 1e-12
 #: Smallest horizontal speed divided by in the friction step.
 V_MIN = 1e-300
-
-
-@njit(inline="always", **JIT)
-def _length(dx, dy, dz):
-    return math.sqrt(dx * dx + dy * dy + dz * dz)
-
-
-@njit(inline="always", **JIT)
-def _spring_force(dx, dy, dz, k, rest, amp_sin, amp_cos, sin_t, cos_t):
-    """Force f (x_j - x_i) on the first end of a spring with vector (dx, dy, dz) = x_j - x_i.
-
-    Shared by both kernels, so every spring's force is the same arithmetic in either.
-    """
-    d = math.sqrt(dx * dx + dy * dy + dz * dz)
-    length0 = rest + amp_sin * sin_t + amp_cos * cos_t
-    f = k * (d - length0) / max(d, D_MIN)
-    return f * dx, f * dy, f * dz
-
-
-@njit(inline="always", **JIT)
-def _damped_spring_force(dx, dy, dz, k, rest, amp_sin, amp_cos, sin_t, cos_t, damp, last):
-    """`_spring_force` with a dashpot in parallel: `damp` (N s/m over dt) times the change of the
-    spring's length since the last step, (d - last) / dt, which semi-implicit Euler makes the
-    relative velocity along the spring. Returns the force and the length d."""
-    d = math.sqrt(dx * dx + dy * dy + dz * dz)
-    length0 = rest + amp_sin * sin_t + amp_cos * cos_t
-    f = (k * (d - length0) + damp * (d - last)) / max(d, D_MIN)
-    return f * dx, f * dy, f * dz, d
 
 
 @njit(inline="always", **JIT)
@@ -171,14 +147,6 @@ def _advance(
                            friction, damping, dt, kind, tp, contact, near)  # fmt: skip
 
 
-@njit(inline="always", **JIT)
-def _actuator_power(dx, dy, dz, k, rest, amp_sin, amp_cos, sin_t, cos_t, omega):
-    """|T dL0/dt| (W): the rate at which a spring's actuator works against its tension T."""
-    d = math.sqrt(dx * dx + dy * dy + dz * dz)
-    length0 = rest + amp_sin * sin_t + amp_cos * cos_t
-    return abs(k * (d - length0) * (omega * (amp_sin * cos_t - amp_cos * sin_t)))
-
-
 @njit(**JIT)
 def simulate_one(
     x, y, z, vx, vy, vz,  # [M] positions (m), velocities (m/s); updated in place
@@ -222,7 +190,7 @@ def simulate_one(
     for s in range(last.shape[0]):
         i = spring_a[s]
         j = spring_b[s]
-        last[s] = _length(x[j] - x[i], y[j] - y[i], z[j] - z[i])
+        last[s] = length(x[j] - x[i], y[j] - y[i], z[j] - z[i])
     frame = 0
     for step in range(n_steps + 1):
         if step == settle_step:
@@ -248,19 +216,19 @@ def simulate_one(
             sfz[s] = z[j] - z[i]
         if energy.shape[0] > 0 and step >= settle_step:
             for s in range(n_springs):
-                energy[s] += dt * _actuator_power(
+                energy[s] += dt * actuator_power(
                     sfx[s], sfy[s], sfz[s], stiffness[s], rest[s], amp_sin[s], amp_cos[s],
                     sin_t, cos_t, omega,
                 )  # fmt: skip
         if damped:
             for s in range(n_springs):
-                sfx[s], sfy[s], sfz[s], last[s] = _damped_spring_force(
+                sfx[s], sfy[s], sfz[s], last[s] = damped_spring_force(
                     sfx[s], sfy[s], sfz[s], stiffness[s], rest[s], amp_sin[s], amp_cos[s],
                     sin_t, cos_t, damp[s], last[s],
                 )  # fmt: skip
         else:
             for s in range(n_springs):
-                sfx[s], sfy[s], sfz[s] = _spring_force(
+                sfx[s], sfy[s], sfz[s] = spring_force(
                     sfx[s], sfy[s], sfz[s], stiffness[s], rest[s], amp_sin[s], amp_cos[s],
                     sin_t, cos_t,
                 )  # fmt: skip
@@ -317,7 +285,7 @@ def simulate_many(
     for q in range(last.shape[0]):
         shift = offsets[q] * n_robots
         for e in range(n - shift):
-            last[q, e] = _length(x[e + shift] - x[e], y[e + shift] - y[e], z[e + shift] - z[e])
+            last[q, e] = length(x[e + shift] - x[e], y[e + shift] - y[e], z[e + shift] - z[e])
     energy = energy.reshape(energy.shape[0], energy.shape[1] * energy.shape[2])
     # Spring force components of every slot, then the force on every point.
     sfx = np.empty((n_dir, n))
@@ -352,20 +320,20 @@ def simulate_many(
             if measure and step >= settle_step:
                 work = energy[q]
                 for e in range(count):
-                    work[e] += dt * _actuator_power(
+                    work[e] += dt * actuator_power(
                         xj[e] - xi[e], yj[e] - yi[e], zj[e] - zi[e],
                         k[e], r0[e], a_s[e], a_c[e], sin_t, cos_t, omega,
                     )  # fmt: skip
             if damped:
                 c, lq = damp[q], last[q]
                 for e in range(count):
-                    px[e], py[e], pz[e], lq[e] = _damped_spring_force(
+                    px[e], py[e], pz[e], lq[e] = damped_spring_force(
                         xj[e] - xi[e], yj[e] - yi[e], zj[e] - zi[e],
                         k[e], r0[e], a_s[e], a_c[e], sin_t, cos_t, c[e], lq[e],
                     )  # fmt: skip
                 continue
             for e in range(count):
-                px[e], py[e], pz[e] = _spring_force(
+                px[e], py[e], pz[e] = spring_force(
                     xj[e] - xi[e], yj[e] - yi[e], zj[e] - zi[e],
                     k[e], r0[e], a_s[e], a_c[e], sin_t, cos_t,
                 )  # fmt: skip

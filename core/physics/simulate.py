@@ -20,6 +20,7 @@ from softevo.core.limits import SMALL_POINTS
 from softevo.core.nulls import to_null, to_nulls
 from softevo.core.objectives import OBJECTIVE_MEASURES, STANDARD_GRAVITY
 from softevo.core.physics import kernels
+from softevo.core.physics.damping import ground_damping, spring_dashpots
 from softevo.core.robots.robot import Mechanics, Robot, build_mechanics
 from softevo.core.robots.settings import SimSettings
 from softevo.core.robots.terrain import kernel_params
@@ -158,20 +159,6 @@ def _scalars(mech: Mechanics) -> tuple:
         *kernel_params(sim.terrain),
         sim.settle_steps,
     )
-
-
-def ground_damping(sim: SimSettings) -> float:
-    """The ground contact's dashpot (N s/m): `contact_damping` of critical for one mass."""
-    return 2.0 * sim.contact_damping * math.sqrt(sim.ground_stiffness * sim.mass)
-
-
-def spring_dashpots(mech: Mechanics) -> np.ndarray:
-    """Each spring's dashpot over dt (N/m, `step.spring_damping`), or no array at all where the
-    material is undamped (the kernels then take the undamped arithmetic, to the last bit)."""
-    sim = mech.sim
-    if sim.material_damping == 0.0:
-        return np.zeros(0)
-    return 2.0 * sim.material_damping * np.sqrt(mech.stiffness * sim.mass / 2.0) / sim.step
 
 
 #: A spring longer than this many times its longest rest length at the end means the integration
