@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import hashlib
 import json
 import math
 import sys
@@ -20,6 +19,7 @@ from softevo.core.search.generation import Step
 from softevo.library import Result
 from softevo.results import write_figures
 from softevo.resume_checks import ResumeError
+from softevo.run_config import breeding_notes, default_out
 
 if TYPE_CHECKING:  # the store (SQLAlchemy) is imported by `softevo run` alone, when it runs
     from softevo.run_store import Checkpoints, Folder
@@ -32,7 +32,8 @@ DESCRIPTION = (
     "config.json, curve.csv, curve.json, best_robot.json, state.json, cache.json and "
     "population.csv, and at the end curve.png, population.png and diversity.png; Ctrl-C "
     "stops, keeps them and draws the figures of the generations done. The default folder is "
-    "named by the config (softevo-runs/PRESET-SHAPE-seedN-HASH, HASH: 8 hex digits of the "
+    "named by the config (softevo-runs/PRESET-SHAPE-ALGORITHM-ENCODING-seedN-HASH, with the "
+    "terrain, fitness and objectives where not the preset's; HASH: 8 hex digits of the "
     "whole config), and a folder holding another config's results is refused. --resume DIR "
     "goes on with a stopped run (Ctrl-C, a kill, a crash) to the same results an "
     "uninterrupted one gives, as the service takes a run over; run.db is checked against "
@@ -81,8 +82,8 @@ def add_parser(commands: Any) -> None:
     )
     run.add_argument(
         "--out", metavar="DIR",
-        help="output folder (softevo-runs/PRESET-SHAPE-seedN-HASH); one holding another "
-        "config's results is refused",
+        help="output folder (softevo-runs/PRESET-SHAPE-ALGORITHM-ENCODING-seedN-HASH); one "
+        "holding another config's results is refused",
     )  # fmt: skip
     run.add_argument(
         "--resume", metavar="DIR",
@@ -197,14 +198,6 @@ def _writable(args: argparse.Namespace, out: Path) -> Path:
     return out
 
 
-def default_out(config: RunConfig) -> Path:
-    """softevo-runs/quick-3x3x3-seed0-1a2b3c4d: two configs never share a default folder."""
-    text = json.dumps(config.to_json(), sort_keys=True, separators=(",", ":"))
-    digest = hashlib.sha256(text.encode()).hexdigest()[:8]
-    shape = "x".join(map(str, config.shape))
-    return Path("softevo-runs") / f"{config.preset or 'custom'}-{shape}-seed{config.seed}-{digest}"
-
-
 def _not_anothers(args: argparse.Namespace, out: Path, config: RunConfig) -> None:
     """Refuse a folder that holds the results of a different config (the same config's are
     rewritten with the same numbers: a run is deterministic in its config)."""
@@ -246,6 +239,8 @@ def _folder(args: argparse.Namespace) -> Folder:
         config = resolve(_request(args))
     except ConfigError as error:
         args.parser.error(str(error))
+    for note in breeding_notes(config):
+        print(f"softevo run: note: {note}", file=sys.stderr)
     out = Path(args.out) if args.out else default_out(config)
     _not_anothers(args, out, config)
     try:

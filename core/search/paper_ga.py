@@ -89,6 +89,12 @@ class PaperGA(Strategy):
                 f"{len(config.objectives)} objectives (set `objectives`)"
             )
 
+    @classmethod
+    def breeds_on(cls, config: GAConfig, setting: str) -> bool:
+        """A weighted GA selects on the objectives."""
+        weighted = setting == "objectives" and config.options.get("weights") is not None
+        return weighted or super().breeds_on(config, setting)
+
     def kept(
         self, state: GAState, individuals: list[Individual], values: np.ndarray
     ) -> dict[str, list[float | None]]:

@@ -124,6 +124,12 @@ class SteadyState(Strategy):
             raise ValueError('options.parents: "archive" needs descriptors and bins')
 
     @classmethod
+    def breeds_on(cls, config: GAConfig, setting: str) -> bool:
+        """With `parents: "archive"` the parents are the archive's elites."""
+        archive = setting in ("descriptors", "bins") and config.options.get("parents") == "archive"
+        return archive or super().breeds_on(config, setting)
+
+    @classmethod
     def state_genomes(cls, config: GAConfig) -> int:
         """The population and the W births in flight."""
         return config.population + window_size(config.options, config.population)

@@ -76,6 +76,13 @@ class Strategy(ABC):
         """Raise ValueError (naming the field) for settings this strategy cannot run with."""
 
     @classmethod
+    def breeds_on(cls, config: GAConfig, setting: str) -> bool:
+        """Whether this strategy's choices read the shared `setting` of `config` (by default: it
+        is in `uses`). Objectives and descriptors it does not read only fill what any run keeps
+        beside its search (the front, the archive), which `softevo run` says in one line."""
+        return setting in cls.uses
+
+    @classmethod
     def state_genomes(cls, config: GAConfig) -> int:
         """Most genomes the run's state holds at once (the service's budget counts them): by
         default a population, the generation the next is bred from."""

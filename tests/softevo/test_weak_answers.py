@@ -128,3 +128,78 @@ def test_out_naming_a_folder_says_it_wants_a_file(
         done.stderr
     )
     assert "--format is needed" not in done.stderr
+
+
+PARETO = ["speed", "-cost_of_transport"]
+
+
+@pytest.mark.parametrize(
+    ("request_", "noted"),
+    [
+        ({"objectives": PARETO}, ["objectives"]),
+        ({"algorithm": "random", "objectives": PARETO, "descriptors": ["voxels"]}, ["both"]),
+        ({"algorithm": "hillclimb", "descriptors": ["voxels"]}, ["descriptors"]),
+        ({"preset": "map-elites", "algorithm": "ga"}, ["descriptors"]),
+        ({"algorithm": "nsga2", "objectives": PARETO}, []),
+        ({"algorithm": "afpo", "objectives": PARETO}, []),
+        ({"objectives": PARETO, "options": {"weights": [1, 0]}}, []),
+        ({"algorithm": "map-elites", "descriptors": ["voxels"]}, []),
+        (
+            {
+                "algorithm": "steady-state",
+                "descriptors": ["voxels"],
+                "options": {"parents": "archive"},
+            },
+            [],
+        ),
+        ({}, []),
+    ],
+)
+def test_settings_the_algorithm_does_not_breed_on_are_noted(
+    request_: dict, noted: list[str]
+) -> None:
+    """Objectives and descriptors an algorithm does not select on only fill the front and the
+    archive kept beside it (how random search and the GA are compared on them): said, not
+    refused, and never for the algorithms that read them."""
+    from softevo.run_config import breeding_notes
+
+    notes = breeding_notes(resolve({"preset": "quick", **request_}))
+    kinds = ["objectives" if "--objectives" in n else "descriptors" for n in notes]
+    assert kinds == (["objectives", "descriptors"] if noted == ["both"] else noted), notes
+
+
+def test_softevo_run_says_the_note_in_one_line_and_runs(tmp_path: Path) -> None:
+    out = str(tmp_path / "run")
+    small = ["--population", "4", "--generations", "1", "--duration", "1", "--workers", "1"]
+    pareto = ["--objectives", "speed,-cost_of_transport"]
+    done = softevo("run", "--preset", "quick", *small, *pareto, "--out", out, "--json")
+    assert done.returncode == 0, done.stderr
+    notes = [line for line in done.stderr.splitlines() if line.startswith("softevo run: note: ")]
+    assert len(notes) == 1 and "ga selects on the fitness (speed) alone" in notes[0]
+    assert "nsga2 and afpo select on them" in notes[0]
+    assert (tmp_path / "run" / "front.csv").is_file()  # the front beside the GA, as said
+
+
+def test_folder_names_say_what_ran_and_the_hash_still_parts_configs() -> None:
+    from softevo.run_config import config_hash, default_out
+
+    def name(**request: object) -> str:
+        config = resolve({"preset": "quick", "seed": 1, **request})
+        folder = default_out(config)
+        assert folder.parent == Path("softevo-runs")
+        assert folder.name.endswith(f"-seed1-{config_hash(config)}")
+        return folder.name.rsplit("-seed", 1)[0]
+
+    assert name() == "quick-3x3x3-ga-voxel"
+    assert name(algorithm="nsga2", objectives=PARETO) == (
+        "quick-3x3x3-nsga2-voxel-speed+min_cost_of_transport"
+    )
+    assert name(encoding="cppn", shape=[4, 4, 4]) == "quick-4x4x4-ga-cppn"
+    assert name(sim={"terrain": {"kind": "rough"}}, objective="forward") == (
+        "quick-3x3x3-ga-voxel-rough-forward"
+    )
+    task = default_out(resolve({"preset": "task-slope", "seed": 1})).name
+    assert task.startswith("task-slope-4x4x4-ga-voxel-seed1-")  # the preset's terrain: unsaid
+    one = default_out(resolve({"preset": "quick", "population": 6}))
+    other = default_out(resolve({"preset": "quick", "population": 8}))
+    assert one.name.rsplit("-", 1)[0] == other.name.rsplit("-", 1)[0] and one != other
