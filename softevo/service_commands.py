@@ -3,6 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import signal
+import threading
+from collections.abc import Iterator
+from types import FrameType
 from typing import Any
 
 from softevo.command_error import CommandError
@@ -111,14 +116,35 @@ def serve_command(args: argparse.Namespace) -> int:
     else:
         _check_migrated(settings.database_url)
     logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
-    uvicorn.run(
-        create_app(settings),
-        host=args.host,
-        port=args.port,
-        log_level=args.log_level,
-        **uvicorn_options(settings),
-    )
+    with exit_on_sigterm():
+        uvicorn.run(
+            create_app(settings),
+            host=args.host,
+            port=args.port,
+            log_level=args.log_level,
+            **uvicorn_options(settings),
+        )
     return 0
+
+
+def _stop(signum: int, frame: FrameType | None) -> None:
+    raise SystemExit(128 + signum)
+
+
+@contextlib.contextmanager
+def exit_on_sigterm() -> Iterator[None]:
+    """SIGTERM ends the process as a normal exit with code 143, so its exit handlers run.
+    uvicorn shuts down gracefully on SIGTERM and then raises it again under the handler it found:
+    Python's default kills the process before multiprocessing's finalizer removes its
+    temporary folder (the pool's fork server socket, /tmp/pymp-*), one left per stopped server."""
+    if threading.current_thread() is not threading.main_thread():  # signals: the main thread's
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, _stop)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def _check_migrated(url: str) -> None:
