@@ -180,11 +180,7 @@ def file_energy(data: dict[str, Any]) -> bool:
 
 def parse_robot(data: Any) -> Robot:
     """Validate a decoded robot file and build the robot it describes."""
-    if not isinstance(data, dict):
-        raise RobotFileError(f"robot file: expected a JSON object, got {type(data).__name__}")
-    other = what_else(data, _RobotModel.model_fields)
-    if other is not None:
-        raise RobotFileError(f"{other}, not a robot file ({FORMAT})")
+    _refuse_other(data)
     if "format" in data and data["format"] != FORMAT:
         raise _refuse("format", f"expected {FORMAT!r}, got {data['format']!r}")
     try:
@@ -274,17 +270,24 @@ def load_robot(path: str | Path) -> Robot:
         raise RobotFileError("JSON nested too deeply") from None
     except ValueError as error:
         raise RobotFileError(str(error)) from None
-    other = what_else(data, _RobotModel.model_fields) if isinstance(data, dict) else None
-    if other is not None:
-        raise RobotFileError(f"{other}, not a robot file ({FORMAT}): {_robot_hint(path)}")
+    _refuse_other(data, path)
     return parse_robot(data)
 
 
-def _robot_hint(path: Path) -> str:
-    """Where the robot is when a run folder's other file was given instead of it."""
-    if (path.parent / RESULTS_ROBOT).is_file():
-        return f"the run's robot is {path.parent / RESULTS_ROBOT} (or give the folder)"
-    return f"give a robot file, or a `softevo run` results folder (its {RESULTS_ROBOT})"
+def _refuse_other(data: Any, path: Path | None = None) -> None:
+    """Refuse what is not an object, or is another of softevo's files (named as what it is; for
+    a file, with where its run's robot is), before validating it field by field."""
+    if not isinstance(data, dict):
+        raise RobotFileError(f"robot file: expected a JSON object, got {type(data).__name__}")
+    other = what_else(data, _RobotModel.model_fields)
+    if other is None:
+        return
+    said = f"{other}, not a robot file ({FORMAT})"
+    if path is not None and (path.parent / RESULTS_ROBOT).is_file():
+        said += f": the run's robot is {path.parent / RESULTS_ROBOT} (or give the folder)"
+    elif path is not None:
+        said += f": give a robot file, or a `softevo run` results folder (its {RESULTS_ROBOT})"
+    raise RobotFileError(said)
 
 
 def _refuse_constant(name: str) -> float:
