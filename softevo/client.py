@@ -22,7 +22,12 @@ import time
 from collections.abc import Iterator
 from typing import Any, Self, TextIO
 
-import httpx
+try:
+    import httpx
+except ModuleNotFoundError:  # `pip install softevo` is the CLI alone
+    raise ModuleNotFoundError(
+        "softevo.client needs httpx, one of the service's packages: pip install 'softevo[service]'"
+    ) from None
 
 #: The statuses a run does not leave (softevo.core.status.FINAL, named here so that this module
 #: loads nothing of the engine; tests/softevo/test_client.py checks that they agree).

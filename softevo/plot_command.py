@@ -8,10 +8,10 @@ import os
 from pathlib import Path
 from typing import Any
 
-import httpx
-
+from softevo.command_error import CommandError
 from softevo.core.outputs import figures
 from softevo.results import read_results
+from softevo.service_commands import need_service
 
 KINDS = ("all", "curve", "population", "diversity")
 
@@ -42,6 +42,21 @@ def add_parser(commands: Any) -> None:
 
 
 def _from_service(url: str, run_id: int) -> tuple[dict[str, Any], list[Any], list[Any]]:
+    """A run of the service at `url` (httpx, the service extra's: imported only for this)."""
+    missing = need_service(("httpx",))
+    if missing:
+        raise CommandError(f"run {run_id} is read from the service: {missing}")
+    import httpx
+
+    try:
+        return _read_run(url, run_id)
+    except httpx.HTTPError as error:
+        raise ValueError(f"cannot read run {run_id} from {url}: {error}") from None
+
+
+def _read_run(url: str, run_id: int) -> tuple[dict[str, Any], list[Any], list[Any]]:
+    import httpx
+
     token = os.environ.get("SOFTEVO_API_TOKEN")
     headers = {"Authorization": f"Bearer {token}"} if token else {}
     with httpx.Client(base_url=url, timeout=60, headers=headers) as client:
@@ -75,10 +90,6 @@ def plot_command(args: argparse.Namespace) -> int:
             config, curve, individuals = _from_service(args.url, int(args.run))
         else:
             raise ValueError(f"{args.run}: neither a results folder nor a run id")
-    except httpx.HTTPError as error:
-        args.parser.exit(
-            1, f"softevo plot: error: cannot read run {args.run} from {args.url}: {error}\n"
-        )
     except ValueError as error:
         args.parser.exit(1, f"softevo plot: error: {error}\n")
     if not curve:

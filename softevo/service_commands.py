@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import importlib.util
 import signal
 import threading
 from collections.abc import Iterator
@@ -11,6 +12,24 @@ from types import FrameType
 from typing import Any
 
 from softevo.command_error import CommandError
+
+#: What `pip install softevo` leaves out: pyproject's `service` extra.
+SERVICE_EXTRA = "pip install 'softevo[service]'"
+
+
+def need_service(modules: tuple[str, ...]) -> str | None:
+    """The line to say when a command needs service packages that are not installed (the CLI
+    alone is `pip install softevo`), or None when they are all there."""
+    missing = [name for name in modules if importlib.util.find_spec(name) is None]
+    if not missing:
+        return None
+    return f"the service's packages are not installed ({', '.join(missing)}): {SERVICE_EXTRA}"
+
+
+def _need(*modules: str) -> None:
+    said = need_service(modules)
+    if said is not None:
+        raise CommandError(said)
 
 
 def add_parsers(commands: Any) -> None:
@@ -101,7 +120,10 @@ def _settings(args: argparse.Namespace) -> Any:
 
 def serve_command(args: argparse.Namespace) -> int:
     import logging
+    import os
 
+    redis = ("redis", "rq") if os.environ.get("SOFTEVO_REDIS_URL") else ()
+    _need("fastapi", "uvicorn", *redis)
     import uvicorn
 
     from softevo.api.app import create_app
@@ -205,6 +227,8 @@ def upgrade_command(args: argparse.Namespace) -> int:
 
 def worker_command(args: argparse.Namespace) -> int:
     import logging
+
+    _need("redis", "rq")
 
     from redis.exceptions import RedisError
 

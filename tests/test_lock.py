@@ -52,6 +52,10 @@ def declared(*, extras: tuple[str, ...] = ()) -> list[Requirement]:
     return [Requirement(line) for line in lines]
 
 
+def service_extra() -> list[str]:
+    return PYPROJECT["project"]["optional-dependencies"]["service"]
+
+
 def readme_test_command() -> str:
     readme = (ROOT / "README.md").read_text()
     section = readme.split("Run the checks and the tests", 1)[1]
@@ -59,7 +63,9 @@ def readme_test_command() -> str:
 
 
 @pytest.mark.parametrize(
-    ("lock", "extras"), [("dev.txt", ("dev",)), ("runtime.txt", ())], ids=["dev", "runtime"]
+    ("lock", "extras"),
+    [("dev.txt", ("service", "dev")), ("runtime.txt", ("service",))],
+    ids=["dev", "runtime"],
 )
 def test_every_declared_requirement_is_locked_inside_its_range(lock: str, extras: tuple) -> None:
     locked = read_lock(lock)
@@ -88,6 +94,8 @@ def test_every_locked_package_has_hashes_and_both_locks_agree() -> None:
     assert not differ, f"the locks pin different versions (dev, runtime): {differ}"
     # what the image needs for the package alone, and no test tool
     assert {"numba", "numpy", "fastapi", "setuptools"} <= set(runtime)
+    # the image serves: the service extra is locked whole (pyproject's `service`)
+    assert {canonicalize_name(Requirement(line).name) for line in service_extra()} <= set(runtime)
     assert not {"pytest", "schemathesis", "playwright", "ruff"} & set(runtime)
 
 
