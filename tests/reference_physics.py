@@ -8,16 +8,25 @@ against it in tests/core/physics/test_physics.py.
 Per step n (t = n * dt, state x_n, v_n; all masses weigh m):
 
 1. rest length of each spring: L0 = rest + amp_sin sin(w t) + amp_cos cos(w t);
-2. spring (i, j): delta = x_j - x_i, d = |delta|, F_i += k (d - L0) delta / d, F_j -= the same
-   (d is floored at 1e-12 so a collapsed spring gives no 0 / 0);
-3. weight m g along z, ground normal force Fn = k_g max(-z, 0) along +z;
+2. spring (i, j): delta = x_j - x_i, d = |delta|, tension T = k (d - L0) + c (d - d_prev) / dt,
+   F_i += T delta / d, F_j -= the same (d is floored at 1e-12 so a collapsed spring gives no
+   0 / 0). The dashpot c = 2 zeta sqrt(k m / 2) (zeta = `material_damping`, m / 2 the reduced
+   mass of two equal masses) acts on the change of the length since the last step; d_prev is
+   the length at step n - 1, the initial length at step 0;
+3. weight m g along z, ground normal force Fn = k_g max(-z, 0) along +z; in contact (Fn > 0)
+   a dashpot c_g = 2 zeta_c sqrt(k_g m) (zeta_c = `contact_damping`) adds c_g (-v_z), v the
+   velocity at step n, and the sum never pulls: Fn = max(k_g depth + c_g (-v_z), 0);
 4. u = v + dt (F + Fn e_z) / m;
 5. Coulomb friction as a velocity change of at most mu Fn dt / m against the horizontal
    velocity: a mass slower than that sticks (its horizontal velocity becomes 0);
-6. v_{n+1} = damping * u;  7. x_{n+1} = x_n + dt v_{n+1}.
+6. v_{n+1} = f u, f = damping exp(-drag dt) (the legacy per-step factor times a decay rate in
+   s^-1);  7. x_{n+1} = x_n + dt v_{n+1}.
+
+dt is `sim.step`: the `dt` set, or `dt_fraction` of the critical step where it is null.
 
 On a terrain other than flat, 3 and 5 use the surface's normal n and penetration depth
-(`terrain_contact`) instead of e_z and -z, and friction acts on u's part in the tangent plane.
+(`terrain_contact`) instead of e_z and -z (the dashpot's approach speed is -v . n), and
+friction acts on u's part in the tangent plane.
 Actuator work: the sum over springs and steps from the settle step on of dt |T dL0/dt|.
 """
 
@@ -51,12 +60,25 @@ def spring_rest_lengths(mech: Mechanics, t: float) -> np.ndarray:
     return mech.rest_length + mech.amp_sin * np.sin(w * t) + mech.amp_cos * np.cos(w * t)
 
 
-def spring_forces(mech: Mechanics, positions: np.ndarray, t: float) -> np.ndarray:
-    """Net spring force on every mass, [M, 3] (N)."""
+def spring_lengths(mech: Mechanics, positions: np.ndarray) -> np.ndarray:
+    """|x_j - x_i| of every spring (m)."""
+    i, j = mech.lattice.springs[:, 0], mech.lattice.springs[:, 1]
+    return np.linalg.norm(positions[j] - positions[i], axis=1)
+
+
+def spring_forces(
+    mech: Mechanics, positions: np.ndarray, t: float, last: np.ndarray | None = None
+) -> np.ndarray:
+    """Net spring force on every mass, [M, 3] (N); with `last`, the springs' lengths at the
+    last step, the dashpots' force c (d - last) / dt too."""
     i, j = mech.lattice.springs[:, 0], mech.lattice.springs[:, 1]
     delta = positions[j] - positions[i]  # from i towards j
     d = np.linalg.norm(delta, axis=1)
     tension = mech.stiffness * (d - spring_rest_lengths(mech, t))  # > 0: stretched, pulls in
+    if last is not None:
+        sim = mech.sim
+        dashpot = 2.0 * sim.material_damping * np.sqrt(mech.stiffness * sim.mass / 2.0)
+        tension = tension + dashpot * (d - last) / sim.step
     along = tension / np.maximum(d, SPRING_LENGTH_FLOOR)
     force_on_i = along[:, None] * delta
     forces = np.zeros_like(positions)
@@ -131,16 +153,35 @@ def actuator_power(mech: Mechanics, positions: np.ndarray, t: float) -> np.ndarr
     return np.abs(tension * rate)
 
 
-def step(mech: Mechanics, x: np.ndarray, v: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """One semi-implicit Euler step from (x_n, v_n) to (x_{n+1}, v_{n+1})."""
+def velocity_factor(mech: Mechanics) -> float:
+    """What every velocity is multiplied by each step: damping exp(-drag dt)."""
     sim = mech.sim
-    m, dt = sim.mass, sim.dt
+    return float(sim.damping * np.exp(-sim.drag * sim.step))
+
+
+def normal_force(mech: Mechanics, depth: np.ndarray, approach: np.ndarray) -> np.ndarray:
+    """The ground's push [M] (N): k_g depth, and in contact the dashpot on the speed `approach`
+    into the ground, never pulling."""
+    sim = mech.sim
+    spring = sim.ground_stiffness * depth
+    dashpot = 2.0 * sim.contact_damping * np.sqrt(sim.ground_stiffness * sim.mass)
+    in_contact = spring > 0.0
+    return np.where(in_contact, np.maximum(spring + dashpot * approach, 0.0), 0.0)
+
+
+def step(
+    mech: Mechanics, x: np.ndarray, v: np.ndarray, n: int, last: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """One semi-implicit Euler step from (x_n, v_n) to (x_{n+1}, v_{n+1}); `last`: the springs'
+    lengths at step n - 1 (the dashpots')."""
+    sim = mech.sim
+    m, dt = sim.mass, sim.step
     t = n * dt
-    force = spring_forces(mech, x, t)
+    force = spring_forces(mech, x, t, last if sim.material_damping > 0 else None)
     force[:, 2] += m * sim.gravity
     if sim.terrain.kind != "flat":
         return _terrain_step(mech, x, v, force)
-    normal = sim.ground_stiffness * np.maximum(-x[:, 2], 0.0)
+    normal = normal_force(mech, np.maximum(-x[:, 2], 0.0), -v[:, 2])
     force[:, 2] += normal
     u = v + dt * force / m
 
@@ -155,7 +196,7 @@ def step(mech: Mechanics, x: np.ndarray, v: np.ndarray, n: int) -> tuple[np.ndar
     u[:, 0] *= sliding_scale
     u[:, 1] *= sliding_scale
 
-    v_next = sim.damping * u
+    v_next = velocity_factor(mech) * u
     x_next = x + dt * v_next
     return x_next, v_next
 
@@ -166,9 +207,9 @@ def _terrain_step(
     """Steps 3-7 on any terrain: the normal force along the surface normal n, and friction
     against the part of u in the tangent plane, u - (u . n) n."""
     sim = mech.sim
-    m, dt = sim.mass, sim.dt
+    m, dt = sim.mass, sim.step
     depth, n = terrain_contact(sim.terrain, x)
-    normal = sim.ground_stiffness * depth
+    normal = normal_force(mech, depth, -(v * n).sum(axis=1))
     u = v + dt * (force + normal[:, None] * n) / m
     along = (u * n).sum(axis=1)
     tangent = u - along[:, None] * n
@@ -176,7 +217,7 @@ def _terrain_step(
     max_change = sim.friction * normal * dt / m
     scale = np.where(speed <= max_change, 0.0, 1.0 - max_change / np.where(speed > 0, speed, 1.0))
     u = tangent * scale[:, None] + along[:, None] * n
-    v_next = sim.damping * u
+    v_next = velocity_factor(mech) * u
     return x + dt * v_next, v_next
 
 
@@ -193,13 +234,16 @@ def run(mech: Mechanics, record_every: int = 0) -> ReferenceRun:
     settle = x.copy() if settle_step == 0 else None
     frames, frame_steps = [], []
     work = np.zeros(mech.n_springs)
+    last = spring_lengths(mech, x)  # the dashpots' d_prev at step 0: the initial lengths
     for n in range(n_steps):
         if record_every > 0 and n % record_every == 0:
             frames.append(x.copy())
             frame_steps.append(n)
         if n >= settle_step:
-            work += sim.dt * actuator_power(mech, x, n * sim.dt)
-        x, v = step(mech, x, v, n)
+            work += sim.step * actuator_power(mech, x, n * sim.step)
+        lengths = spring_lengths(mech, x)
+        x, v = step(mech, x, v, n, last)
+        last = lengths
         if n + 1 == settle_step:
             settle = x.copy()
     if record_every > 0:
