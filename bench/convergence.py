@@ -78,8 +78,11 @@ def run(profile: str, quick: bool) -> int:
         one, half, ref = at[1][i], at[2][i], at[4][i]
         changes = [_change(one[m], ref[m]) for m in MEASURES]
         good += within(one["speed"], ref["speed"])
-        print(f"| {name} | {one['speed']:.4f} | {half['speed']:.4f} | {ref['speed']:.4f} | "
-              + " | ".join(changes) + " |")  # fmt: skip
+        print(
+            f"| {name} | {one['speed']:.4f} | {half['speed']:.4f} | {ref['speed']:.4f} | "
+            + " | ".join(changes)
+            + " |"
+        )
     coarse = [row["speed"] for row in at[1]]
     fine = [row["speed"] for row in at[4]]
     rho = spearmanr(coarse, fine).statistic

@@ -38,7 +38,7 @@ from pathlib import Path
 import numba
 import numpy as np
 
-from softevo.core.physics import kernels, simulate, simulate_batch
+from softevo.core.physics import integrate, kernels, simulate, simulate_batch
 from softevo.core.robots.robot import Actuation, Mechanics, VoxelRobot, build_mechanics
 from softevo.core.robots.settings import SimSettings
 from softevo.core.robots.tasks import TASKS
@@ -162,7 +162,7 @@ def numpy_simulate(mechs: list[Mechanics], n_steps: int) -> np.ndarray:
         u = v + force * h
         u[2] += (weight + normal) * h
         speed = np.sqrt(u[0] ** 2 + u[1] ** 2)
-        slip = np.maximum(1.0 - sim.friction * normal * h / np.maximum(speed, kernels.V_MIN), 0.0)
+        slip = np.maximum(1.0 - sim.friction * normal * h / np.maximum(speed, integrate.V_MIN), 0.0)
         u[0] *= slip
         u[1] *= slip
         v = u * sim.damping

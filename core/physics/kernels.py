@@ -51,7 +51,8 @@ import math
 import numpy as np
 from numba import njit
 
-from softevo.core.physics.contact import contact_pass, contact_scratch
+from softevo.core.physics.contact import contact_scratch
+from softevo.core.physics.integrate import advance
 from softevo.core.physics.jit import JIT
 from softevo.core.physics.springs import (
     actuator_power,
@@ -59,92 +60,6 @@ from softevo.core.physics.springs import (
     length,
     spring_force,
 )
-
-#: Smallest horizontal speed divided by in the friction step.
-V_MIN = 1e-300
-
-
-@njit(inline="always", **JIT)
-def _normal_force(ground_k, ground_c, depth, approach):
-    """The ground's push (N) on a point `depth` (m) under its surface, moving into it at
-    `approach` (m/s): a penalty spring and, in contact only, a dashpot, never pulling."""
-    normal = ground_k * max(depth, 0.0)
-    if ground_c > 0.0 and normal > 0.0:
-        normal = max(normal + ground_c * approach, 0.0)
-    return normal
-
-
-@njit(inline="always", **JIT)
-def _integrate(
-    step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, ground_c, friction, damping, dt
-):
-    """Ground contact, friction, damping and the semi-implicit Euler update of every mass.
-
-    All arrays are 1-D and the same length; `fz` already holds the weight. Shared by both kernels,
-    so they integrate identically.
-    """
-    for m in range(x.shape[0]):
-        h = step_factor[m]
-        normal = _normal_force(ground_k, ground_c, -z[m], -vz[m])
-        ux = vx[m] + fx[m] * h
-        uy = vy[m] + fy[m] * h
-        uz = vz[m] + (fz[m] + normal) * h
-        speed = math.sqrt(ux * ux + uy * uy)
-        slip = max(1.0 - friction * normal * h / max(speed, V_MIN), 0.0)
-        vx[m] = ux * slip * damping
-        vy[m] = uy * slip * damping
-        vz[m] = uz * damping
-        x[m] += vx[m] * dt
-        y[m] += vy[m] * dt
-        z[m] += vz[m] * dt
-
-
-@njit(inline="always", **JIT)
-def _integrate_terrain(
-    step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, ground_c, friction, damping, dt,
-    kind, tp, contact, near,
-):  # fmt: skip
-    """`_integrate` on any terrain: the penalty force along the surface normal, Coulomb
-    friction against the velocity's part in the tangent plane (`contact` and `near`: scratch
-    for `contact_pass`)."""
-    contact_pass(kind, tp, x, y, z, step_factor, contact, near)
-    depth, nx, ny, nz = contact[0], contact[1], contact[2], contact[3]
-    for m in range(x.shape[0]):
-        h = step_factor[m]
-        normal = ground_k * depth[m]
-        if ground_c > 0.0 and normal > 0.0:
-            into = -(vx[m] * nx[m] + vy[m] * ny[m] + vz[m] * nz[m])
-            normal = _normal_force(ground_k, ground_c, depth[m], into)
-        ux = vx[m] + (fx[m] + normal * nx[m]) * h
-        uy = vy[m] + (fy[m] + normal * ny[m]) * h
-        uz = vz[m] + (fz[m] + normal * nz[m]) * h
-        along = ux * nx[m] + uy * ny[m] + uz * nz[m]
-        tx = ux - along * nx[m]
-        ty = uy - along * ny[m]
-        tz = uz - along * nz[m]
-        speed = math.sqrt(tx * tx + ty * ty + tz * tz)
-        slip = max(1.0 - friction * normal * h / max(speed, V_MIN), 0.0)
-        vx[m] = (tx * slip + along * nx[m]) * damping
-        vy[m] = (ty * slip + along * ny[m]) * damping
-        vz[m] = (tz * slip + along * nz[m]) * damping
-        x[m] += vx[m] * dt
-        y[m] += vy[m] * dt
-        z[m] += vz[m] * dt
-
-
-@njit(inline="always", **JIT)
-def _advance(
-    step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, ground_c, friction, damping, dt,
-    kind, tp, contact, near,
-):  # fmt: skip
-    """One step's contact and integration for both kernels: the flat ground's original
-    arithmetic (`_integrate`, to the last bit) or any other terrain's."""
-    if kind == 0:
-        _integrate(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, ground_c, friction,
-                   damping, dt)  # fmt: skip
-    else:
-        _integrate_terrain(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, ground_c,
-                           friction, damping, dt, kind, tp, contact, near)  # fmt: skip
 
 
 @njit(**JIT)
@@ -217,21 +132,45 @@ def simulate_one(
         if energy.shape[0] > 0 and step >= settle_step:
             for s in range(n_springs):
                 energy[s] += dt * actuator_power(
-                    sfx[s], sfy[s], sfz[s], stiffness[s], rest[s], amp_sin[s], amp_cos[s],
-                    sin_t, cos_t, omega,
-                )  # fmt: skip
+                    sfx[s],
+                    sfy[s],
+                    sfz[s],
+                    stiffness[s],
+                    rest[s],
+                    amp_sin[s],
+                    amp_cos[s],
+                    sin_t,
+                    cos_t,
+                    omega,
+                )
         if damped:
             for s in range(n_springs):
                 sfx[s], sfy[s], sfz[s], last[s] = damped_spring_force(
-                    sfx[s], sfy[s], sfz[s], stiffness[s], rest[s], amp_sin[s], amp_cos[s],
-                    sin_t, cos_t, damp[s], last[s],
-                )  # fmt: skip
+                    sfx[s],
+                    sfy[s],
+                    sfz[s],
+                    stiffness[s],
+                    rest[s],
+                    amp_sin[s],
+                    amp_cos[s],
+                    sin_t,
+                    cos_t,
+                    damp[s],
+                    last[s],
+                )
         else:
             for s in range(n_springs):
                 sfx[s], sfy[s], sfz[s] = spring_force(
-                    sfx[s], sfy[s], sfz[s], stiffness[s], rest[s], amp_sin[s], amp_cos[s],
-                    sin_t, cos_t,
-                )  # fmt: skip
+                    sfx[s],
+                    sfy[s],
+                    sfz[s],
+                    stiffness[s],
+                    rest[s],
+                    amp_sin[s],
+                    amp_cos[s],
+                    sin_t,
+                    cos_t,
+                )
         # Force on each mass, summed in registers in spring order (what `F_i += ...` means).
         for m in range(n_masses):
             ax = 0.0
@@ -250,8 +189,27 @@ def simulate_one(
             fx[m] = ax
             fy[m] = ay
             fz[m] = az
-        _advance(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, ground_c, friction,
-                 damping, dt, terrain_kind, terrain, contact, near)  # fmt: skip
+        advance(
+            step_factor,
+            x,
+            y,
+            z,
+            vx,
+            vy,
+            vz,
+            fx,
+            fy,
+            fz,
+            ground_k,
+            ground_c,
+            friction,
+            damping,
+            dt,
+            terrain_kind,
+            terrain,
+            contact,
+            near,
+        )
 
 
 @njit(**JIT)
@@ -321,22 +279,46 @@ def simulate_many(
                 work = energy[q]
                 for e in range(count):
                     work[e] += dt * actuator_power(
-                        xj[e] - xi[e], yj[e] - yi[e], zj[e] - zi[e],
-                        k[e], r0[e], a_s[e], a_c[e], sin_t, cos_t, omega,
-                    )  # fmt: skip
+                        xj[e] - xi[e],
+                        yj[e] - yi[e],
+                        zj[e] - zi[e],
+                        k[e],
+                        r0[e],
+                        a_s[e],
+                        a_c[e],
+                        sin_t,
+                        cos_t,
+                        omega,
+                    )
             if damped:
                 c, lq = damp[q], last[q]
                 for e in range(count):
                     px[e], py[e], pz[e], lq[e] = damped_spring_force(
-                        xj[e] - xi[e], yj[e] - yi[e], zj[e] - zi[e],
-                        k[e], r0[e], a_s[e], a_c[e], sin_t, cos_t, c[e], lq[e],
-                    )  # fmt: skip
+                        xj[e] - xi[e],
+                        yj[e] - yi[e],
+                        zj[e] - zi[e],
+                        k[e],
+                        r0[e],
+                        a_s[e],
+                        a_c[e],
+                        sin_t,
+                        cos_t,
+                        c[e],
+                        lq[e],
+                    )
                 continue
             for e in range(count):
                 px[e], py[e], pz[e] = spring_force(
-                    xj[e] - xi[e], yj[e] - yi[e], zj[e] - zi[e],
-                    k[e], r0[e], a_s[e], a_c[e], sin_t, cos_t,
-                )  # fmt: skip
+                    xj[e] - xi[e],
+                    yj[e] - yi[e],
+                    zj[e] - zi[e],
+                    k[e],
+                    r0[e],
+                    a_s[e],
+                    a_c[e],
+                    sin_t,
+                    cos_t,
+                )
         # Scatter in each point's spring order: the second ends (-=) by descending offset, then
         # the first ends (+=) by ascending offset. One loop per component: each has a single
         # store stream and a single load stream, so it vectorises with one cheap overlap check.
@@ -368,5 +350,24 @@ def simulate_many(
                 fy[e] += py[e]
             for e in range(count):
                 fz[e] += pz[e]
-        _advance(step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, ground_c, friction,
-                 damping, dt, terrain_kind, terrain, contact, near)  # fmt: skip
+        advance(
+            step_factor,
+            x,
+            y,
+            z,
+            vx,
+            vy,
+            vz,
+            fx,
+            fy,
+            fz,
+            ground_k,
+            ground_c,
+            friction,
+            damping,
+            dt,
+            terrain_kind,
+            terrain,
+            contact,
+            near,
+        )
