@@ -4,8 +4,9 @@ Kept apart from `kernels` (which integrates) because it is geometry: one functio
 kind of `softevo.core.robots.terrain`, each a loop the compiler vectorises. The flat ground never
 comes here (the kernels keep its original arithmetic).
 
-numba's cache of the kernels is keyed on kernels.py alone: after editing this module, springs.py, integrate.py or
-`sincos`, touch kernels.py (or remove its __pycache__) so they are compiled again.
+numba's cache of the kernels is keyed on kernels.py alone: after editing this module,
+springs.py, integrate.py or `sincos`, touch kernels.py (or remove its __pycache__) so they are
+compiled again.
 """
 
 from __future__ import annotations
