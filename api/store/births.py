@@ -19,10 +19,15 @@ def stored_births(
     columns = INDIVIDUALS.c
     with db.read() as session:
         rows = session.execute(
-            select(columns.generation, columns["index"], columns.genome_hash, columns.status,
-                   columns.fitness, columns.measures)
-            .where(columns.run_id == run_id, columns.generation >= since)
-        ).all()  # fmt: skip
+            select(
+                columns.generation,
+                columns["index"],
+                columns.genome_hash,
+                columns.status,
+                columns.fitness,
+                columns.measures,
+            ).where(columns.run_id == run_id, columns.generation >= since)
+        ).all()
     return {
         (row.generation, row.index): (
             row.genome_hash,

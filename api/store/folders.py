@@ -57,13 +57,16 @@ def take(db: Database, run_id: int, owner: str, seconds: float, generations: int
         session.execute(
             update(Run)
             .where(Run.id == run_id)
-            .values(status=(RunStatus.COMPLETED if finished else RunStatus.RUNNING).value,
-                    lease_owner=owner,
-                    lease_expires=now().timestamp() + seconds,
-                    config={**config, "generations": generations},
-                    generations_total=generations, error=None,
-                    finished_at=now() if finished else None)
-        )  # fmt: skip
+            .values(
+                status=(RunStatus.COMPLETED if finished else RunStatus.RUNNING).value,
+                lease_owner=owner,
+                lease_expires=now().timestamp() + seconds,
+                config={**config, "generations": generations},
+                generations_total=generations,
+                error=None,
+                finished_at=now() if finished else None,
+            )
+        )
 
 
 def release(db: Database, run_id: int, owner: str) -> None:
@@ -102,24 +105,35 @@ def history(db: Database, run_id: int) -> list[dict[str, Any]]:
             select(*columns).where(Generation.run_id == run_id).order_by(Generation.generation)
         )
         return [
-            {key: value for key, value in row._mapping.items()
-             if value is not None or key not in _OPTIONAL}
+            {
+                key: value
+                for key, value in row._mapping.items()
+                if value is not None or key not in _OPTIONAL
+            }
             for row in rows
-        ]  # fmt: skip
+        ]
 
 
 def population(db: Database, run_id: int, before: int, after: int = -1) -> Iterator[Any]:
     """Rows (generation, index, fitness, operator, measures) of the generations after `after`
     and before `before` (committed ones), in order: population.csv's rows."""
-    columns = (Individual.generation, Individual.index, Individual.fitness, Individual.operator,
-               Individual.measures)  # fmt: skip
+    columns = (
+        Individual.generation,
+        Individual.index,
+        Individual.fitness,
+        Individual.operator,
+        Individual.measures,
+    )
     with db.read() as session:
         yield from session.execute(
             select(*columns)
-            .where(Individual.run_id == run_id, Individual.generation > max(after, IMPORTED),
-                   Individual.generation < before)
+            .where(
+                Individual.run_id == run_id,
+                Individual.generation > max(after, IMPORTED),
+                Individual.generation < before,
+            )
             .order_by(Individual.generation, Individual.index)
-        )  # fmt: skip
+        )
 
 
 def import_run(
@@ -138,39 +152,70 @@ def import_run(
     best = state.best
     with db.write() as session:
         run = Run(
-            status=RunStatus.RUNNING.value, preset=config.preset, seed=config.seed,
-            config=config.to_json(), generations_done=state.generation,
-            generations_total=config.generations, evaluations=sum(s.evaluations for s in history),
-            saved=sum(s.saved for s in history), compute_seconds=elapsed, created_at=now(),
-            started_at=now(), takeovers=0,
+            status=RunStatus.RUNNING.value,
+            preset=config.preset,
+            seed=config.seed,
+            config=config.to_json(),
+            generations_done=state.generation,
+            generations_total=config.generations,
+            evaluations=sum(s.evaluations for s in history),
+            saved=sum(s.saved for s in history),
+            compute_seconds=elapsed,
+            created_at=now(),
+            started_at=now(),
+            takeovers=0,
             ga_state=json.loads(state.to_text(history=False, archive=False)),
             archive=None if state.archive is None else state.archive.to_json(),
             best_fitness=None if best is None else best[1],
             best_generation=None if best is None else best[2],
-        )  # fmt: skip
+        )
         session.add(run)
         session.flush()
         connection = session.connection()
         if history:
             connection.execute(
                 insert(Generation.__table__),
-                [{"run_id": run.id, **{key: row.get(key) for key in (*CURVE_FIELDS, *_OPTIONAL)},
-                  "seconds": 0.0, "committed_at": now()}
-                 for row in (stats.to_json() for stats in history)],
-            )  # fmt: skip
+                [
+                    {
+                        "run_id": run.id,
+                        **{key: row.get(key) for key in (*CURVE_FIELDS, *_OPTIONAL)},
+                        "seconds": 0.0,
+                        "committed_at": now(),
+                    }
+                    for row in (stats.to_json() for stats in history)
+                ],
+            )
         fitness, measures = known
-        cached = [(IMPORTED, number, key, fitness[key], "imported", measures.get(key, {}))
-                  for number, key in enumerate(sorted(fitness))]  # fmt: skip
-        listed = [(row["generation"], row["index"], "", row["fitness"], row["operator"],
-                   row["measures"]) for row in rows]  # fmt: skip
+        cached = [
+            (IMPORTED, number, key, fitness[key], "imported", measures.get(key, {}))
+            for number, key in enumerate(sorted(fitness))
+        ]
+        listed = [
+            (row["generation"], row["index"], "", row["fitness"], row["operator"], row["measures"])
+            for row in rows
+        ]
         if cached or listed:
-            connection.execute(insert(Individual.__table__), [
-                {"run_id": run.id, "generation": generation, "index": index,
-                 "genome": EncodedJSON("{}"), "genome_hash": key, "operator": operator[:32],
-                 "parents": EncodedJSON("[]"), "fitness": to_null(value),
-                 "measures": EncodedJSON(record_text(record)), "evaluated_at": now(),
-                 "status": (IndividualStatus.EVALUATED if to_null(value) is not None
-                            else IndividualStatus.FAILED).value}
-                for generation, index, key, value, operator, record in cached + listed
-            ])  # fmt: skip
+            connection.execute(
+                insert(Individual.__table__),
+                [
+                    {
+                        "run_id": run.id,
+                        "generation": generation,
+                        "index": index,
+                        "genome": EncodedJSON("{}"),
+                        "genome_hash": key,
+                        "operator": operator[:32],
+                        "parents": EncodedJSON("[]"),
+                        "fitness": to_null(value),
+                        "measures": EncodedJSON(record_text(record)),
+                        "evaluated_at": now(),
+                        "status": (
+                            IndividualStatus.EVALUATED
+                            if to_null(value) is not None
+                            else IndividualStatus.FAILED
+                        ).value,
+                    }
+                    for generation, index, key, value, operator, record in cached + listed
+                ],
+            )
         return run.id

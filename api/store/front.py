@@ -20,8 +20,12 @@ def evaluated(db: Database, run_id: int, chunk: int = 4096) -> Iterator[dict[str
     with db.read() as session:
         result = session.execute(
             select(
-                Individual.generation, Individual.index, Individual.fitness,
-                Individual.operator, Individual.measures, Individual.genome_hash,
+                Individual.generation,
+                Individual.index,
+                Individual.fitness,
+                Individual.operator,
+                Individual.measures,
+                Individual.genome_hash,
             )
             .where(
                 Individual.run_id == run_id,
@@ -31,11 +35,16 @@ def evaluated(db: Database, run_id: int, chunk: int = 4096) -> Iterator[dict[str
             )
             .order_by(Individual.generation, Individual.index)
             .execution_options(yield_per=chunk)
-        )  # fmt: skip
+        )
         for generation, index, fitness, operator, measures, genome_hash in result:
-            yield {"generation": generation, "index": index, "fitness": fitness,
-                   "operator": operator, "measures": measures or {},
-                   "genome_hash": genome_hash}  # fmt: skip
+            yield {
+                "generation": generation,
+                "index": index,
+                "fitness": fitness,
+                "operator": operator,
+                "measures": measures or {},
+                "genome_hash": genome_hash,
+            }
 
 
 def genomes(db: Database, run_id: int, where: list[tuple[int, int]]) -> dict[tuple[int, int], Any]:

@@ -88,22 +88,43 @@ _RUNS = select(Run).options(defer(Run.ga_state, raiseload=True), defer(Run.archi
 
 def _record(row: Run) -> RunRecord:
     return RunRecord(
-        id=row.id, status=row.status, preset=row.preset, seed=row.seed, config=row.config,
-        sweep_id=row.sweep_id, generations_done=row.generations_done,
-        generations_total=row.generations_total, evaluations=row.evaluations, saved=row.saved,
-        best_fitness=row.best_fitness, best_generation=row.best_generation,
-        compute_seconds=row.compute_seconds, error=row.error, created_at=row.created_at,
-        started_at=row.started_at, finished_at=row.finished_at, takeovers=row.takeovers,
-    )  # fmt: skip
+        id=row.id,
+        status=row.status,
+        preset=row.preset,
+        seed=row.seed,
+        config=row.config,
+        sweep_id=row.sweep_id,
+        generations_done=row.generations_done,
+        generations_total=row.generations_total,
+        evaluations=row.evaluations,
+        saved=row.saved,
+        best_fitness=row.best_fitness,
+        best_generation=row.best_generation,
+        compute_seconds=row.compute_seconds,
+        error=row.error,
+        created_at=row.created_at,
+        started_at=row.started_at,
+        finished_at=row.finished_at,
+        takeovers=row.takeovers,
+    )
 
 
 def _new_run(config: RunConfig, sweep_id: int | None = None) -> Run:
     return Run(
-        sweep_id=sweep_id, status=RunStatus.QUEUED.value, preset=config.preset, seed=config.seed,
-        config=config.to_json(), ga_state=None, generations_done=0,
-        generations_total=config.generations, evaluations=0, saved=0, compute_seconds=0.0,
-        created_at=now(), takeovers=0,
-    )  # fmt: skip
+        sweep_id=sweep_id,
+        status=RunStatus.QUEUED.value,
+        preset=config.preset,
+        seed=config.seed,
+        config=config.to_json(),
+        ga_state=None,
+        generations_done=0,
+        generations_total=config.generations,
+        evaluations=0,
+        saved=0,
+        compute_seconds=0.0,
+        created_at=now(),
+        takeovers=0,
+    )
 
 
 def create_run(db: Database, config: RunConfig, max_queued: int | None = None) -> RunRecord:
@@ -158,9 +179,13 @@ def cancel_run(db: Database, run_id: int) -> RunRecord:
         changed = session.execute(
             update(Run)
             .where(Run.id == run_id, Run.status.in_(active))
-            .values(status=RunStatus.CANCELLED.value, finished_at=now(), lease_owner=None,
-                    lease_expires=None)
-        ).rowcount  # fmt: skip
+            .values(
+                status=RunStatus.CANCELLED.value,
+                finished_at=now(),
+                lease_owner=None,
+                lease_expires=None,
+            )
+        ).rowcount
         if changed != 1:
             status = session.scalar(select(Run.status).where(Run.id == run_id))
             if status is None:
@@ -248,9 +273,10 @@ def population_points(db: Database, run_id: int) -> tuple[np.ndarray, np.ndarray
     the dot plot's two columns as arrays (16 bytes an individual), read CHUNK rows at a time,
     never the rows' other columns."""
     with db.read() as session:
-        size = session.scalar(
-            select(func.count(Individual.id)).where(Individual.run_id == run_id)
-        ) or 0  # fmt: skip
+        size = (
+            session.scalar(select(func.count(Individual.id)).where(Individual.run_id == run_id))
+            or 0
+        )
         generations, fitness = np.zeros(size, dtype=np.int64), np.full(size, np.nan)
         result = session.execute(
             select(Individual.generation, Individual.fitness)

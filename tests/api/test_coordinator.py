@@ -58,8 +58,16 @@ def test_migrations_create_exactly_the_models_schema(db: Database) -> None:
 
 def test_a_second_row_for_an_individual_is_impossible(db: Database) -> None:
     run = store.create_run(db, resolve(REQUEST))
-    row = {"run_id": run.id, "generation": 0, "index": 0, "genome": {}, "genome_hash": "h",
-           "operator": "random", "parents": [], "status": "pending"}  # fmt: skip
+    row = {
+        "run_id": run.id,
+        "generation": 0,
+        "index": 0,
+        "genome": {},
+        "genome_hash": "h",
+        "operator": "random",
+        "parents": [],
+        "status": "pending",
+    }
     with db.write() as session:
         session.add(Individual(**row))
     with pytest.raises(IntegrityError), db.write() as session:
@@ -140,9 +148,10 @@ def test_takeover_after_a_coordinator_freezes_gives_the_undisturbed_curve(
     assert record.takeovers >= 1 and record.error is None
     with db.read() as session:
         statuses = session.execute(
-            select(Individual.status, func.count()).where(Individual.run_id == run.id)
+            select(Individual.status, func.count())
+            .where(Individual.run_id == run.id)
             .group_by(Individual.status)
-        ).all()  # fmt: skip
+        ).all()
     assert "pending" not in dict(statuses)
     assert sum(count for _, count in statuses) == 8 * 4
     reference = undisturbed(request_body)
@@ -250,10 +259,11 @@ def test_fitness_waiting_for_its_write_is_saved_at_a_shutdown(
     with db.read() as session:
         saved = session.scalar(
             select(func.count()).where(
-                Individual.run_id == run.id, Individual.generation == 0,
+                Individual.run_id == run.id,
+                Individual.generation == 0,
                 Individual.status.in_(("evaluated", "failed")),
             )
-        )  # fmt: skip
+        )
     assert saved == 6
     successor = Counting()
     assert drive(db, run.id, successor, batch_size=2) == "completed"

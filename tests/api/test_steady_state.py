@@ -19,17 +19,22 @@ from tests.api.test_coordinator import FreezingEvaluator, drive, wait_status
 from tests.reference import undisturbed
 
 REQUEST = {
-    "preset": "quick", "seed": 6, "population": 8, "generations": 4,
-    "algorithm": "steady-state", "options": {"window": 6},
-}  # fmt: skip
+    "preset": "quick",
+    "seed": 6,
+    "population": 8,
+    "generations": 4,
+    "algorithm": "steady-state",
+    "options": {"window": 6},
+}
 
 
 def _rows(db: Database, run_id: int) -> dict[str, int]:
     with db.read() as session:
         counts = session.execute(
-            select(Individual.status, func.count()).where(Individual.run_id == run_id)
+            select(Individual.status, func.count())
+            .where(Individual.run_id == run_id)
             .group_by(Individual.status)
-        ).all()  # fmt: skip
+        ).all()
     return dict(counts)  # type: ignore[arg-type]
 
 

@@ -23,10 +23,14 @@ AWKWARD = ["a,b", 'q"uote', "{brace}", "back\\slash", "NULL", "", "ünï ☃", "
 
 def awkward_members() -> list[dict[str, Any]]:
     return [
-        {"genome": {"discrete": [i, -i], "real": [0.1 * i, 1e-300], "tag": text},
-         "genome_hash": f"h{i}{text}"[:32], "operator": text[:32], "parents": [i, i + 1]}
+        {
+            "genome": {"discrete": [i, -i], "real": [0.1 * i, 1e-300], "tag": text},
+            "genome_hash": f"h{i}{text}"[:32],
+            "operator": text[:32],
+            "parents": [i, i + 1],
+        }
         for i, text in enumerate(AWKWARD)
-    ]  # fmt: skip
+    ]
 
 
 def stored(db: Database, run_id: int) -> list[tuple[Any, ...]]:
@@ -34,13 +38,20 @@ def stored(db: Database, run_id: int) -> list[tuple[Any, ...]]:
     with db.read() as session:
         rows = session.execute(
             select(
-                columns["index"], cast(columns.genome, Text), columns.genome_hash,
-                columns.operator, cast(columns.parents, Text), columns.status, columns.fitness,
-                cast(columns.measures, Text), columns.eval_seconds, columns.worker,
+                columns["index"],
+                cast(columns.genome, Text),
+                columns.genome_hash,
+                columns.operator,
+                cast(columns.parents, Text),
+                columns.status,
+                columns.fitness,
+                cast(columns.measures, Text),
+                columns.eval_seconds,
+                columns.worker,
             )
             .where(columns.run_id == run_id)
             .order_by(columns["index"])
-        )  # fmt: skip
+        )
         return [tuple(row) for row in rows]
 
 
@@ -76,8 +87,13 @@ def test_many_rows_store_what_one_row_at_a_time_stores(db: Database) -> None:
     assert rows[1][5:8] == ("failed", None, "{}")  # no record: an empty one
     assert rows[6][5:] == ("pending", None, None, None, None)
     with db.read() as session:  # one timestamp for the call, read back as UTC
-        times = set(session.scalars(select(Individual.evaluated_at).where(
-            Individual.run_id == at_once, Individual.status != "pending")))  # fmt: skip
+        times = set(
+            session.scalars(
+                select(Individual.evaluated_at).where(
+                    Individual.run_id == at_once, Individual.status != "pending"
+                )
+            )
+        )
     (when,) = times
     assert when.utcoffset() == timedelta(0)
     assert abs(datetime.now(UTC) - when) < timedelta(minutes=1)
@@ -90,5 +106,7 @@ def test_a_seconds_figure_that_is_not_finite_is_stored_as_null(db: Database) -> 
     store.driving.keep_generation(db, run_id, OWNER, 0, awkward_members())
     store.driving.save_fitness(db, run_id, OWNER, 0, [Landed({0: 0.5, 1: 0.25}, "w", math.nan)])
     rows = stored(db, run_id)
-    assert [row[5:9] for row in rows[:2]] == [("evaluated", 0.5, "{}", None),
-                                              ("evaluated", 0.25, "{}", None)]  # fmt: skip
+    assert [row[5:9] for row in rows[:2]] == [
+        ("evaluated", 0.5, "{}", None),
+        ("evaluated", 0.25, "{}", None),
+    ]

@@ -30,10 +30,14 @@ OWNER = Lease("owner-a", 30.0)
 
 def members(tag: str = "x") -> list[dict]:
     return [
-        {"genome": {"discrete": [i], "real": []}, "genome_hash": f"{tag}{i}",
-         "operator": "random", "parents": []}
+        {
+            "genome": {"discrete": [i], "real": []},
+            "genome_hash": f"{tag}{i}",
+            "operator": "random",
+            "parents": [],
+        }
         for i in range(4)
-    ]  # fmt: skip
+    ]
 
 
 def driven(db: Database) -> int:
@@ -79,17 +83,30 @@ def test_a_fitness_is_written_once_and_nan_is_failed_not_zero(db: Database) -> N
 
 
 STATS = {
-    "generation": 0, "best": 0.5, "mean": 0.3, "median": 0.3, "min": 0.1, "std": 0.1,
-    "best_so_far": 0.5, "diversity": 0.4, "size": 4, "failed": 0, "evaluations": 3, "saved": 1,
-}  # fmt: skip
+    "generation": 0,
+    "best": 0.5,
+    "mean": 0.3,
+    "median": 0.3,
+    "min": 0.1,
+    "std": 0.1,
+    "best_so_far": 0.5,
+    "diversity": 0.4,
+    "size": 4,
+    "failed": 0,
+    "evaluations": 3,
+    "saved": 1,
+}
 
 
 def commit(db: Database, run_id: int, lease: Lease, done: bool, **parts: object) -> None:
     store.driving.commit_generation(
-        db, run_id, lease,
-        GenerationCommit(STATS, {"seed": 1}, cached={3: 0.1}, best=(0.5, 0), done=done,
-                         seconds=1.5, **parts),  # type: ignore[arg-type]
-    )  # fmt: skip
+        db,
+        run_id,
+        lease,
+        GenerationCommit(
+            STATS, {"seed": 1}, cached={3: 0.1}, best=(0.5, 0), done=done, seconds=1.5, **parts
+        ),  # type: ignore[arg-type]
+    )
 
 
 def test_a_commit_writes_the_generation_counters_and_cached_fitness(db: Database) -> None:
@@ -114,9 +131,10 @@ def test_a_commit_writes_what_landed_and_keeps_the_next_generation(db: Database)
     columns = (Individual.genome_hash, Individual.status, Individual.fitness, Individual.worker)
     with db.read() as session:
         rows = session.execute(
-            select(*columns).where(Individual.run_id == run_id)
+            select(*columns)
+            .where(Individual.run_id == run_id)
             .order_by(Individual.generation, Individual.index)
-        ).all()  # fmt: skip
+        ).all()
     assert [tuple(row) for row in rows[:4]] == [
         ("x0", IndividualStatus.EVALUATED, 0.5, "w1"),
         ("x1", IndividualStatus.FAILED, None, "w1"),
