@@ -21,7 +21,7 @@ from softevo.core.robots.robot_file import robot_to_json
 from softevo.core.robots.terrain import mesh
 
 if TYPE_CHECKING:  # the physics loads only when a replay is asked
-    from softevo.core.physics.simulate import Trajectory
+    from softevo.core.physics.results import Trajectory
 
 
 def record_every(robot: Robot, masses: int, fps: float, max_positions: int) -> int:
