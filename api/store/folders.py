@@ -10,7 +10,7 @@ import json
 from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
-from sqlalchemy import func, insert, inspect, select, update
+from sqlalchemy import Connection, func, insert, inspect, select, update
 
 from softevo.api.db import Database, EncodedJSON
 from softevo.api.models import Generation, Individual, Run
@@ -148,74 +148,96 @@ def import_run(
     history), fitness cache and measures by genome hash (`known`, rows of generation
     `IMPORTED`) and population.csv's `rows` (generation, index, fitness, operator, measures:
     their genomes are not in the files, so each keeps an empty one and no hash)."""
-    history = state.history
-    best = state.best
     with db.write() as session:
-        run = Run(
-            status=RunStatus.RUNNING.value,
-            preset=config.preset,
-            seed=config.seed,
-            config=config.to_json(),
-            generations_done=state.generation,
-            generations_total=config.generations,
-            evaluations=sum(s.evaluations for s in history),
-            saved=sum(s.saved for s in history),
-            compute_seconds=elapsed,
-            created_at=now(),
-            started_at=now(),
-            takeovers=0,
-            ga_state=json.loads(state.to_text(history=False, archive=False)),
-            archive=None if state.archive is None else state.archive.to_json(),
-            best_fitness=None if best is None else best[1],
-            best_generation=None if best is None else best[2],
-        )
+        run = _imported_run(config, state, elapsed)
         session.add(run)
         session.flush()
         connection = session.connection()
-        if history:
-            connection.execute(
-                insert(Generation.__table__),
-                [
-                    {
-                        "run_id": run.id,
-                        **{key: row.get(key) for key in (*CURVE_FIELDS, *_OPTIONAL)},
-                        "seconds": 0.0,
-                        "committed_at": now(),
-                    }
-                    for row in (stats.to_json() for stats in history)
-                ],
-            )
-        fitness, measures = known
-        cached = [
-            (IMPORTED, number, key, fitness[key], "imported", measures.get(key, {}))
-            for number, key in enumerate(sorted(fitness))
-        ]
-        listed = [
-            (row["generation"], row["index"], "", row["fitness"], row["operator"], row["measures"])
-            for row in rows
-        ]
-        if cached or listed:
-            connection.execute(
-                insert(Individual.__table__),
-                [
-                    {
-                        "run_id": run.id,
-                        "generation": generation,
-                        "index": index,
-                        "genome": EncodedJSON("{}"),
-                        "genome_hash": key,
-                        "operator": operator[:32],
-                        "parents": EncodedJSON("[]"),
-                        "fitness": to_null(value),
-                        "measures": EncodedJSON(record_text(record)),
-                        "evaluated_at": now(),
-                        "status": (
-                            IndividualStatus.EVALUATED
-                            if to_null(value) is not None
-                            else IndividualStatus.FAILED
-                        ).value,
-                    }
-                    for generation, index, key, value, operator, record in cached + listed
-                ],
-            )
+        _insert_curve(connection, run.id, state)
+        _insert_individuals(connection, run.id, known, rows)
         return run.id
+
+
+def _imported_run(config: RunConfig, state: GAState, elapsed: float) -> Run:
+    """The run's row, running (the import finishes it), with the curve's totals."""
+    history = state.history
+    best = state.best
+    return Run(
+        status=RunStatus.RUNNING.value,
+        preset=config.preset,
+        seed=config.seed,
+        config=config.to_json(),
+        generations_done=state.generation,
+        generations_total=config.generations,
+        evaluations=sum(s.evaluations for s in history),
+        saved=sum(s.saved for s in history),
+        compute_seconds=elapsed,
+        created_at=now(),
+        started_at=now(),
+        takeovers=0,
+        ga_state=json.loads(state.to_text(history=False, archive=False)),
+        archive=None if state.archive is None else state.archive.to_json(),
+        best_fitness=None if best is None else best[1],
+        best_generation=None if best is None else best[2],
+    )
+
+
+def _insert_curve(connection: Connection, run_id: int, state: GAState) -> None:
+    """The curve's rows from the state's history."""
+    if not state.history:
+        return
+    connection.execute(
+        insert(Generation.__table__),
+        [
+            {
+                "run_id": run_id,
+                **{key: row.get(key) for key in (*CURVE_FIELDS, *_OPTIONAL)},
+                "seconds": 0.0,
+                "committed_at": now(),
+            }
+            for row in (stats.to_json() for stats in state.history)
+        ],
+    )
+
+
+def _insert_individuals(
+    connection: Connection,
+    run_id: int,
+    known: tuple[Mapping[str, float], Mapping[str, Mapping[str, float]]],
+    rows: Sequence[dict[str, Any]],
+) -> None:
+    """The cache's genomes (generation `IMPORTED`) and population.csv's rows, without genomes."""
+    fitness, measures = known
+    cached = [
+        (IMPORTED, number, key, fitness[key], "imported", measures.get(key, {}))
+        for number, key in enumerate(sorted(fitness))
+    ]
+    listed = [
+        (row["generation"], row["index"], "", row["fitness"], row["operator"], row["measures"])
+        for row in rows
+    ]
+    if not (cached or listed):
+        return
+    connection.execute(
+        insert(Individual.__table__),
+        [
+            {
+                "run_id": run_id,
+                "generation": generation,
+                "index": index,
+                "genome": EncodedJSON("{}"),
+                "genome_hash": key,
+                "operator": operator[:32],
+                "parents": EncodedJSON("[]"),
+                "fitness": to_null(value),
+                "measures": EncodedJSON(record_text(record)),
+                "evaluated_at": now(),
+                "status": (
+                    IndividualStatus.EVALUATED
+                    if to_null(value) is not None
+                    else IndividualStatus.FAILED
+                ).value,
+            }
+            for generation, index, key, value, operator, record in cached + listed
+        ],
+    )

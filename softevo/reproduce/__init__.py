@@ -37,6 +37,31 @@ def add_parser(commands: Any) -> None:
         ),
     )
     parser.add_argument("--quick", action="store_true", help="tiny settings, same code path")
+    _add_suites(parser)
+    parser.add_argument(
+        "--out",
+        help="output folder, relative to the current folder (default docs/experiments; with "
+        "--tasks docs/experiments/tasks, with --qd docs/experiments/qd, with --objectives "
+        "docs/experiments/objectives, with --steady docs/experiments/steady: the repository's "
+        "own when run from its root); the full path is printed first",
+    )
+    parser.add_argument(
+        "--url", help="a running service (token from SOFTEVO_API_TOKEN); default: start one"
+    )
+    parser.add_argument(
+        "--workers", type=int, help="pool processes of the private service (default: all cores)"
+    )
+    parser.add_argument(
+        "--resume",
+        action="store_true",
+        help="reuse matching runs already in --out/softevo.db (or the --url service) instead of "
+        "starting afresh; submit only the missing ones",
+    )
+    parser.set_defaults(handler=reproduce_command)
+
+
+def _add_suites(parser: argparse.ArgumentParser) -> None:
+    """The suites other than the paper's, one flag each."""
     parser.add_argument(
         "--tasks",
         action="store_true",
@@ -66,26 +91,6 @@ def add_parser(commands: Any) -> None:
         "and one run again with robots that take time in proportion to their size, compared "
         "with the instant one): steady.csv, timing.csv, steady.md, steady.png",
     )
-    parser.add_argument(
-        "--out",
-        help="output folder, relative to the current folder (default docs/experiments; with "
-        "--tasks docs/experiments/tasks, with --qd docs/experiments/qd, with --objectives "
-        "docs/experiments/objectives, with --steady docs/experiments/steady: the repository's "
-        "own when run from its root); the full path is printed first",
-    )
-    parser.add_argument(
-        "--url", help="a running service (token from SOFTEVO_API_TOKEN); default: start one"
-    )
-    parser.add_argument(
-        "--workers", type=int, help="pool processes of the private service (default: all cores)"
-    )
-    parser.add_argument(
-        "--resume",
-        action="store_true",
-        help="reuse matching runs already in --out/softevo.db (or the --url service) instead of "
-        "starting afresh; submit only the missing ones",
-    )
-    parser.set_defaults(handler=reproduce_command)
 
 
 def reproduce_command(args: argparse.Namespace) -> int:
