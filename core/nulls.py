@@ -41,6 +41,7 @@ class Record(dict[str, float]):
     object every generation, is not encoded again. A record is never changed once read."""
 
     __slots__ = ("text",)
+    text: str
 
 
 def record_text(record: Mapping[str, float | None]) -> str:

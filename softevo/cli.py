@@ -119,7 +119,8 @@ def _cmd_export(args: argparse.Namespace) -> int:
         args.parser.error(f"--format {args.format} but --out {args.out!r} names {named}: say one")
     format = args.format or named
     if format is None:
-        args.parser.error(
+        parser: argparse.ArgumentParser = args.parser
+        parser.error(
             f"--format is needed: the suffix of {args.out!r} names no format ({', '.join(FORMATS)})"
         )
     _check_out(args.out)

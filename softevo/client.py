@@ -202,7 +202,8 @@ class Run:
     """One run on the service. `data` is the API's last answer about it (GET /runs/{id})."""
 
     def __init__(self, client: Client, run_id: int, data: dict[str, Any] | None = None) -> None:
-        self.client, self.id, self.data = client, run_id, data
+        self.client, self.id = client, run_id
+        self.data: dict[str, Any] = data or {}  # {}: not read yet
 
     def __repr__(self) -> str:
         status = self.data["status"] if self.data else "?"
@@ -278,7 +279,8 @@ class Sweep:
     """One sweep: runs over bounding boxes (or tasks) and seeds. `data` is GET /sweeps/{id}."""
 
     def __init__(self, client: Client, sweep_id: int, data: dict[str, Any] | None = None) -> None:
-        self.client, self.id, self.data = client, sweep_id, data
+        self.client, self.id = client, sweep_id
+        self.data: dict[str, Any] = data or {}  # {}: not read yet
 
     def __repr__(self) -> str:
         status = self.data["status"] if self.data else "?"

@@ -101,8 +101,8 @@ class DriverStatement:
             params = compiled.recordset(rows, self.scalars)
             return connection.exec_driver_sql(self.postgres_rows, params).rowcount
         last: list[list[Any]] = [[_NOTHING, None] for _ in compiled.processors]
-        params = [compiled.params(row, last) for row in rows]
-        result = connection.exec_driver_sql(compiled.sql, params if len(params) > 1 else params[0])
+        each = [compiled.params(row, last) for row in rows]
+        result = connection.exec_driver_sql(compiled.sql, each if len(each) > 1 else each[0])
         return result.rowcount
 
     def _compile(self, dialect: Dialect) -> _Compiled:

@@ -122,7 +122,9 @@ def to_stl(robot: Robot) -> bytes:
     grid = voxel_grid(robot)
     vertices, faces = _triangles(surface_faces(grid != "empty")[0])
     mesh = trimesh.Trimesh(vertices * robot.sim.edge_length, faces, process=False)
-    return bytes(mesh.export(file_type="stl"))
+    data = mesh.export(file_type="stl")
+    assert isinstance(data, bytes), "trimesh writes binary STL"
+    return data
 
 
 def linear_rgb(colour: tuple[int, int, int]) -> list[float]:

@@ -178,7 +178,9 @@ def draw_diversity(axes: Any, rows: Sequence[Row], title: str) -> None:
     )
 
 
-def _single(draw: Any, data: Sequence[Row], title: str, height: float = 3.4, **how: Any) -> Figure:
+def _single(
+    draw: Any, data: Sequence[Row] | Points, title: str, height: float = 3.4, **how: Any
+) -> Figure:
     plt = pyplot()
     figure, axes = plt.subplots(figsize=(6.5, height))
     draw(axes, data, title, **how)

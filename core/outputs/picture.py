@@ -111,6 +111,8 @@ class _Scene:
         self.half = 1.1 * span + robot.sim.edge_length  # half the view's width (m): room to move
 
 
+RGB = tuple[float, float, float]
+
 #: The legend's names of the materials (robot-file labels), in this order.
 MATERIAL_NAMES = {
     "soft": "soft",
@@ -121,7 +123,7 @@ MATERIAL_NAMES = {
 }
 
 
-def _legend(labels: np.ndarray, phased: bool) -> list[tuple[str, tuple[float, ...]]]:
+def _legend(labels: np.ndarray, phased: bool) -> list[tuple[str, RGB]]:
     """(name, colour) of each material the robot's drawn faces show, for the picture's legend;
     a co-designed robot's actuated voxels are one entry, their hue being their phase."""
     present = set(np.asarray(labels).tolist())
@@ -133,7 +135,8 @@ def _legend(labels: np.ndarray, phased: bool) -> list[tuple[str, tuple[float, ..
             if label == "sine" or "sine" not in present:
                 entries.append(("actuated (hue: phase)", (0.85, 0.55, 0.4)))
             continue
-        entries.append((name, tuple(c / 255 for c in COLOURS[label])))
+        red, green, blue = COLOURS[label]
+        entries.append((name, (red / 255, green / 255, blue / 255)))
     return entries
 
 
@@ -147,9 +150,17 @@ def _draw(scene: _Scene, ax: Any, positions: np.ndarray, clock: str | None) -> N
     ax.set_xlim(-half, half)
     ax.set_ylim(-half * aspect, half * aspect)
     (polygons, tiles), (screen, colours) = _polygons(scene, positions)
-    ax.add_collection(PolyCollection(polygons, facecolors=tiles, edgecolors="none"))
+    # An array [N, 4, 2] takes PolyCollection's fast path; its stub knows only a Sequence
     ax.add_collection(
-        PolyCollection(screen, facecolors=colours, edgecolors=(0, 0, 0, 0.35), linewidths=0.4)
+        PolyCollection(polygons, facecolors=tiles, edgecolors="none")  # type: ignore[arg-type]
+    )
+    ax.add_collection(
+        PolyCollection(
+            screen,  # type: ignore[arg-type]
+            facecolors=colours,
+            edgecolors=(0, 0, 0, 0.35),
+            linewidths=0.4,
+        )
     )
     if clock is not None:
         ax.text(0.03, 0.95, clock, transform=ax.transAxes, va="top", fontsize=8)
@@ -225,8 +236,9 @@ def _ground(scene: _Scene, centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     reach = 2.5 * scene.half
     x0, y0 = math.floor((centre[0] - reach) / edge), math.floor((centre[1] - reach) / edge)
     n = math.ceil(2 * reach / edge) + 1
-    i, j = np.meshgrid(np.arange(x0, x0 + n), np.arange(y0, y0 + n), indexing="ij")
-    i, j = i.ravel(), j.ravel()
+    i, j = (
+        v.ravel() for v in np.meshgrid(np.arange(x0, x0 + n), np.arange(y0, y0 + n), indexing="ij")
+    )
     corner = np.array([(0, 0), (1, 0), (1, 1), (0, 1)])
     x = (i[:, None] + corner[None, :, 0]) * edge
     y = (j[:, None] + corner[None, :, 1]) * edge
@@ -277,7 +289,12 @@ def movie(robot: Robot, format: str, fps: float = FPS, seconds: float = SECONDS)
     scene = _Scene(robot)
     figure, ax = _figure(SIZE)
     drawing = _Frames(scene, ax)
-    writer = PillowWriter(fps=fps) if format == "gif" else FFMpegWriter(fps=fps, codec="h264")
+    # matplotlib's stubs say int; both writers take a float (12.5 frames a second is allowed)
+    writer = (
+        PillowWriter(fps=fps)  # type: ignore[arg-type]
+        if format == "gif"
+        else FFMpegWriter(fps=fps, codec="h264")  # type: ignore[arg-type]
+    )
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / f"picture.{format}"
         with writer.saving(figure, str(path), dpi=_DPI):

@@ -22,6 +22,7 @@ amplitude and offset from 0 over softevo's settle time (no jolt; softevo measure
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -53,7 +54,7 @@ class VoxelActuation:
         return bool(np.any(self.amplitude != 0) or np.any(self.offset != 0))
 
 
-def _grid(values: np.ndarray, shape: tuple[int, int, int]) -> np.ndarray:
+def _grid(values: Sequence[float] | np.ndarray, shape: tuple[int, int, int]) -> np.ndarray:
     """Flat per-voxel values (x fastest) as a grid [x, y, z]."""
     nx, ny, nz = shape
     return np.asarray(values, dtype=np.float64).reshape(nz, ny, nx).transpose(2, 1, 0)

@@ -14,6 +14,7 @@ from __future__ import annotations
 import os
 import tempfile
 from pathlib import Path
+from typing import Literal, TypedDict
 
 import numba
 
@@ -39,11 +40,22 @@ def use_cache_folder() -> None:
     the variable when it is imported, so its setting is also written where numba looks now."""
     if not os.environ.get("NUMBA_CACHE_DIR"):
         os.environ["NUMBA_CACHE_DIR"] = str(user_cache_folder())
-    numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]
+    # numba.config makes its names at import time from the environment, so a checker sees none
+    numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]  # type: ignore[attr-defined]
 
 
 use_cache_folder()
 
+
 #: Options of every kernel: cached, callable without the GIL, plain IEEE arithmetic (numpy's error
 #: model and no fastmath), no bounds checks.
-JIT = {"cache": True, "nogil": True, "error_model": "numpy", "boundscheck": False}
+class JitOptions(TypedDict):
+    """numba's keyword options, typed so that `njit(**JIT)` is checked."""
+
+    cache: bool
+    nogil: bool
+    error_model: Literal["numpy"]
+    boundscheck: bool
+
+
+JIT: JitOptions = {"cache": True, "nogil": True, "error_model": "numpy", "boundscheck": False}

@@ -35,7 +35,13 @@ DEFAULT_LANES = 8
 SMALL_WIDTH = 4
 
 
-def _scalars(mech: Mechanics) -> tuple:
+#: The kernels' scalar arguments, in their order: omega (rad/s), dt (s), steps, weight (N),
+#: ground stiffness (N/m) and damping (N s/m), friction, velocity factor, terrain kind and
+#: parameters, settle steps.
+Scalars = tuple[float, float, int, float, float, float, float, float, int, np.ndarray, int]
+
+
+def _scalars(mech: Mechanics) -> Scalars:
     sim = mech.sim
     return (
         mech.omega,
@@ -88,8 +94,8 @@ def _result(
         masses=mech.n_masses,
         springs=mech.n_springs,
         steps=mech.sim.n_steps,
-        com_start=tuple(float(v) for v in com_start),
-        com_end=tuple(float(v) for v in com_end),
+        com_start=_point(com_start),
+        com_end=_point(com_end),
         distance=distance,
         speed=distance / seconds,
         wall_seconds=wall,
@@ -101,6 +107,11 @@ def _result(
         total_mass=mech.n_masses * mech.sim.mass,
         heading=_heading(com_end[:2] - com_start[:2]) if stable else math.nan,
     )
+
+
+def _point(xyz: np.ndarray) -> tuple[float, float, float]:
+    x, y, z = (float(v) for v in xyz)
+    return x, y, z
 
 
 def _heading(shift: np.ndarray) -> float:
@@ -123,7 +134,6 @@ def simulate(
     n_frames = len(range(0, n_steps, record_every)) + 1 if record_every > 0 else 0
     frames = np.empty((n_frames, 3, mech.n_masses))
     step_factor = np.full(mech.n_masses, mech.sim.step / mech.sim.mass)
-    *scalars, settle_step = _scalars(mech)
     springs = mech.lattice.springs
     work = np.zeros(mech.n_springs if energy else 0)
     started = time.perf_counter()
@@ -142,8 +152,7 @@ def simulate(
         mech.amp_sin,
         mech.amp_cos,
         spring_dashpots(mech),
-        *scalars,
-        settle_step,
+        *_scalars(mech),
         settle[0],
         settle[1],
         settle[2],
@@ -196,9 +205,8 @@ def _pack(group: list[Mechanics]) -> tuple:
     # Lattice coordinates (x, y, z) of every robot's points, and their bounding box.
     coords = [np.stack(np.unravel_index(m.lattice.points, grid)[::-1], axis=1) for m in group]
     low = np.min([c.min(axis=0) for c in coords], axis=0)
-    box = tuple(int(v) for v in np.max([c.max(axis=0) for c in coords], axis=0) - low + 1)
-    bx, by, bz = box
-    offsets = _box_offsets(box)
+    bx, by, bz = (int(v) for v in np.max([c.max(axis=0) for c in coords], axis=0) - low + 1)
+    offsets = _box_offsets((bx, by, bz))
     n_points, n_robots = bx * by * bz, len(group)
 
     # Points a robot lacks sit at their own lattice point (distinct from its masses), never move.

@@ -171,7 +171,8 @@ def _label_materials(
         ),
     }
     rows = np.array([table[label] for label in labels], dtype=np.float64).reshape(-1, 3)
-    return tuple(np.ascontiguousarray(column) for column in rows.T)  # contiguous: one compile
+    stiffness, rest, amplitude = (np.ascontiguousarray(column) for column in rows.T)
+    return stiffness, rest, amplitude  # contiguous: one compile
 
 
 def _voxel_mechanics(robot: VoxelRobot) -> Mechanics:

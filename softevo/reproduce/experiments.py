@@ -294,11 +294,11 @@ class Experiments:
             budget = self.budget(group)
             if budget is not None:
                 best = [self.best_within(r["id"], budget) for r in group.runs]
-                best = [b for b in best if b is not None]
+                known = [b for b in best if b is not None]
                 row["budget"] = budget
-                if best:
-                    row["budget_best_mean"] = statistics.fmean(best)
-                    row["budget_best_std"] = statistics.pstdev(best)
+                if known:
+                    row["budget_best_mean"] = statistics.fmean(known)
+                    row["budget_best_std"] = statistics.pstdev(known)
             rows.append(row)
         return rows
 
