@@ -38,7 +38,7 @@ def build(path: Path, individuals: int, population: int) -> None:
     """The store: one completed run, its curve and its individuals, written in chunks."""
     from softevo.api import store
     from softevo.api.db import Database
-    from softevo.api.models import Generation, Individual, Run
+    from softevo.api.models import GenerationRow, IndividualRow, RunRow
     from softevo.core.config import RunConfig
 
     generations = individuals // population
@@ -57,11 +57,11 @@ def build(path: Path, individuals: int, population: int) -> None:
     run = store.create_run(db, config)
     encoding, rng, now = config.make_encoding(), np.random.default_rng(1), datetime.now(UTC)
     genomes = [encoding.random(rng) for _ in range(min(population, 200))]  # reused: same size
-    with db.write() as session:
+    with db.write_session() as session:
         for generation in range(generations):
             fitness = rng.normal(0.1, 0.05, population)
             session.execute(
-                insert(Individual),
+                insert(IndividualRow),
                 [
                     {
                         "run_id": run.id,
@@ -81,7 +81,7 @@ def build(path: Path, individuals: int, population: int) -> None:
                 ],
             )
             session.execute(
-                insert(Generation),
+                insert(GenerationRow),
                 [
                     {
                         "run_id": run.id,
@@ -103,8 +103,8 @@ def build(path: Path, individuals: int, population: int) -> None:
                 ],
             )
         session.execute(
-            update(Run)
-            .where(Run.id == run.id)
+            update(RunRow)
+            .where(RunRow.id == run.id)
             .values(
                 status="completed",
                 generations_done=generations,

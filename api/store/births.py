@@ -17,7 +17,7 @@ def stored_births(
     hash, fitness (None: not evaluated yet; NaN: failed) and record of measures. A streaming
     strategy's births in flight, read once when a driver takes the run over."""
     columns = INDIVIDUALS.c
-    with db.read() as session:
+    with db.read_session() as session:
         rows = session.execute(
             select(
                 columns.generation,

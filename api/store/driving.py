@@ -16,7 +16,7 @@ from typing import Any
 from sqlalchemy import Connection, bindparam, insert, select, update
 
 from softevo.api.db import Database, EncodedJSON
-from softevo.api.models import Generation, Individual, Run
+from softevo.api.models import GenerationRow, IndividualRow, RunRow
 from softevo.api.store import leases
 from softevo.api.store.runs import now
 from softevo.api.store.statements import DriverStatement
@@ -39,7 +39,7 @@ CURVE_FIELDS = (
 )
 # Core tables: the driver's statements skip the ORM's per-statement work (they run several times
 # a generation, for every run this process drives).
-INDIVIDUALS, GENERATIONS, RUNS = Individual.__table__, Generation.__table__, Run.__table__
+INDIVIDUALS, GENERATIONS, RUNS = IndividualRow.__table__, GenerationRow.__table__, RunRow.__table__
 _PENDING = IndividualStatus.PENDING.value
 
 
@@ -67,9 +67,9 @@ def _fence(connection: Connection, run_id: int, lease: Lease) -> None:
 def load(db: Database, run_id: int) -> tuple[dict[str, Any], dict[str, Any] | None]:
     """The run's config and the GA state stored with its last committed generation, its
     archive (kept in a column of its own) put back in."""
-    with db.read() as session:
+    with db.read_session() as session:
         row = session.execute(
-            select(Run.config, Run.ga_state, Run.archive).where(Run.id == run_id)
+            select(RunRow.config, RunRow.ga_state, RunRow.archive).where(RunRow.id == run_id)
         ).one()
         if row.ga_state is None or row.archive is None:
             return row.config, row.ga_state
@@ -83,15 +83,17 @@ def known_fitness(
     from `since` on, if given), and their records of measures (NaN = not measured; rows upgraded
     from before revision 0004 hold the fitness's measure and the heading), by genome hash."""
     where = [
-        Individual.run_id == run_id,
-        Individual.generation < before,
-        Individual.status != IndividualStatus.PENDING,
+        IndividualRow.run_id == run_id,
+        IndividualRow.generation < before,
+        IndividualRow.status != IndividualStatus.PENDING,
     ]
     if since is not None:
-        where.append(Individual.generation >= since)
-    with db.read() as session:
+        where.append(IndividualRow.generation >= since)
+    with db.read_session() as session:
         rows = session.execute(
-            select(Individual.genome_hash, Individual.fitness, Individual.measures).where(*where)
+            select(IndividualRow.genome_hash, IndividualRow.fitness, IndividualRow.measures).where(
+                *where
+            )
         ).all()
         fitness = {genome_hash: from_null(value) for genome_hash, value, _ in rows}
         return fitness, {genome_hash: from_null_record(record) for genome_hash, _, record in rows}
@@ -103,7 +105,7 @@ def keep_generation(
     """Insert the generation's members (dicts of genome, genome_hash, operator, parents), once;
     if it was kept before (a takeover), check it is the same and return the fitness and
     records of measures saved (by index)."""
-    with db.writing() as connection:
+    with db.write_connection() as connection:
         _fence(connection, run_id, lease)
         columns = INDIVIDUALS.c
         rows = connection.execute(
@@ -267,7 +269,7 @@ def save_fitness(
 ) -> None:
     """Batches' fitness, written once per individual, in one transaction (after the `members`
     a streaming strategy bred since the last write)."""
-    with db.writing() as connection:
+    with db.write_connection() as connection:
         _fence(connection, run_id, lease)
         _insert_births(connection, run_id, members)
         rows = _fitness_rows(run_id, generation, landed)
@@ -377,7 +379,7 @@ def commit_generation(db: Database, run_id: int, lease: Lease, commit: Generatio
     stats = commit.stats
     generation = stats["generation"]
     best = (None, None) if commit.best is None else commit.best
-    with db.writing() as connection:
+    with db.write_connection() as connection:
         _fence(connection, run_id, lease)
         _insert_births(connection, run_id, commit.members)
         rows = _fitness_rows(run_id, generation, commit.landed)
@@ -421,10 +423,10 @@ def commit_generation(db: Database, run_id: int, lease: Lease, commit: Generatio
 
 def fail(db: Database, run_id: int, owner: str, message: str) -> None:
     """The run failed for good (a bug, a broken evaluator): say why on it."""
-    with db.write() as session:
+    with db.write_session() as session:
         session.execute(
-            update(Run)
-            .where(Run.id == run_id, Run.lease_owner == owner)
+            update(RunRow)
+            .where(RunRow.id == run_id, RunRow.lease_owner == owner)
             .values(
                 status=RunStatus.FAILED.value,
                 error=message[:2000],

@@ -13,7 +13,7 @@ from typing import Any
 from sqlalchemy import Connection, func, insert, inspect, select, update
 
 from softevo.api.db import Database, EncodedJSON
-from softevo.api.models import Generation, Individual, Run
+from softevo.api.models import GenerationRow, IndividualRow, RunRow
 from softevo.api.store.driving import CURVE_FIELDS
 from softevo.api.store.runs import now
 from softevo.core.config import RunConfig
@@ -43,8 +43,8 @@ def checkpoint(db: Database) -> None:
 
 def the_run(db: Database) -> int | None:
     """The id of the folder's run (None: none yet)."""
-    with db.read() as session:
-        return session.scalar(select(func.min(Run.id)))
+    with db.read_session() as session:
+        return session.scalar(select(func.min(RunRow.id)))
 
 
 def take(db: Database, run_id: int, owner: str, seconds: float, generations: int) -> None:
@@ -53,10 +53,10 @@ def take(db: Database, run_id: int, owner: str, seconds: float, generations: int
     takes it stops the first)."""
     config = db_config(db, run_id)
     finished = totals(db, run_id)[0] >= generations
-    with db.write() as session:
+    with db.write_session() as session:
         session.execute(
-            update(Run)
-            .where(Run.id == run_id)
+            update(RunRow)
+            .where(RunRow.id == run_id)
             .values(
                 status=(RunStatus.COMPLETED if finished else RunStatus.RUNNING).value,
                 lease_owner=owner,
@@ -71,24 +71,26 @@ def take(db: Database, run_id: int, owner: str, seconds: float, generations: int
 
 def release(db: Database, run_id: int, owner: str) -> None:
     """Give the lease back (stopped or finished): the next `take` finds the run free."""
-    with db.write() as session:
+    with db.write_session() as session:
         session.execute(
-            update(Run).where(Run.id == run_id, Run.lease_owner == owner).values(lease_expires=0.0)
+            update(RunRow)
+            .where(RunRow.id == run_id, RunRow.lease_owner == owner)
+            .values(lease_expires=0.0)
         )
 
 
 def db_config(db: Database, run_id: int) -> dict[str, Any]:
-    with db.read() as session:
-        return dict(session.scalar(select(Run.config).where(Run.id == run_id)))
+    with db.read_session() as session:
+        return dict(session.scalar(select(RunRow.config).where(RunRow.id == run_id)))
 
 
 def totals(db: Database, run_id: int) -> tuple[int, int, int, float]:
     """(generations done, evaluations, saved, compute seconds) of the run."""
-    with db.read() as session:
+    with db.read_session() as session:
         row = session.execute(
-            select(Run.generations_done, Run.evaluations, Run.saved, Run.compute_seconds).where(
-                Run.id == run_id
-            )
+            select(
+                RunRow.generations_done, RunRow.evaluations, RunRow.saved, RunRow.compute_seconds
+            ).where(RunRow.id == run_id)
         ).one()
         return row.generations_done, row.evaluations, row.saved, row.compute_seconds
 
@@ -99,10 +101,12 @@ _OPTIONAL = ("coverage", "qd_score", "hypervolume", "front_size")
 def history(db: Database, run_id: int) -> list[dict[str, Any]]:
     """The committed generations' statistics in order, every field (`GenerationStats.to_json`'s:
     the API's curve leaves some out); a column of a kind the run has not left out."""
-    columns = [getattr(Generation, name) for name in (*CURVE_FIELDS, *_OPTIONAL)]
-    with db.read() as session:
+    columns = [getattr(GenerationRow, name) for name in (*CURVE_FIELDS, *_OPTIONAL)]
+    with db.read_session() as session:
         rows = session.execute(
-            select(*columns).where(Generation.run_id == run_id).order_by(Generation.generation)
+            select(*columns)
+            .where(GenerationRow.run_id == run_id)
+            .order_by(GenerationRow.generation)
         )
         return [
             {
@@ -118,21 +122,21 @@ def population(db: Database, run_id: int, before: int, after: int = -1) -> Itera
     """Rows (generation, index, fitness, operator, measures) of the generations after `after`
     and before `before` (committed ones), in order: population.csv's rows."""
     columns = (
-        Individual.generation,
-        Individual.index,
-        Individual.fitness,
-        Individual.operator,
-        Individual.measures,
+        IndividualRow.generation,
+        IndividualRow.index,
+        IndividualRow.fitness,
+        IndividualRow.operator,
+        IndividualRow.measures,
     )
-    with db.read() as session:
+    with db.read_session() as session:
         yield from session.execute(
             select(*columns)
             .where(
-                Individual.run_id == run_id,
-                Individual.generation > max(after, IMPORTED),
-                Individual.generation < before,
+                IndividualRow.run_id == run_id,
+                IndividualRow.generation > max(after, IMPORTED),
+                IndividualRow.generation < before,
             )
-            .order_by(Individual.generation, Individual.index)
+            .order_by(IndividualRow.generation, IndividualRow.index)
         )
 
 
@@ -148,7 +152,7 @@ def import_run(
     history), fitness cache and measures by genome hash (`known`, rows of generation
     `IMPORTED`) and population.csv's `rows` (generation, index, fitness, operator, measures:
     their genomes are not in the files, so each keeps an empty one and no hash)."""
-    with db.write() as session:
+    with db.write_session() as session:
         run = _imported_run(config, state, elapsed)
         session.add(run)
         session.flush()
@@ -158,11 +162,11 @@ def import_run(
         return run.id
 
 
-def _imported_run(config: RunConfig, state: GAState, elapsed: float) -> Run:
+def _imported_run(config: RunConfig, state: GAState, elapsed: float) -> RunRow:
     """The run's row, running (the import finishes it), with the curve's totals."""
     history = state.history
     best = state.best
-    return Run(
+    return RunRow(
         status=RunStatus.RUNNING.value,
         preset=config.preset,
         seed=config.seed,
@@ -187,7 +191,7 @@ def _insert_curve(connection: Connection, run_id: int, state: GAState) -> None:
     if not state.history:
         return
     connection.execute(
-        insert(Generation.__table__),
+        insert(GenerationRow.__table__),
         [
             {
                 "run_id": run_id,
@@ -219,7 +223,7 @@ def _insert_individuals(
     if not (cached or listed):
         return
     connection.execute(
-        insert(Individual.__table__),
+        insert(IndividualRow.__table__),
         [
             {
                 "run_id": run_id,

@@ -15,7 +15,7 @@ from sqlalchemy import event, insert
 
 from softevo.api import store
 from softevo.api.db import Database
-from softevo.api.models import Individual
+from softevo.api.models import IndividualRow
 from softevo.core.config import RunConfig
 
 GENOME = re.compile(r"individuals\.genome\b(?!_)")  # the column, not genome_hash
@@ -31,9 +31,9 @@ def fill(db: Database, generations: int = 3) -> tuple[int, list[float | None]]:
     run = store.create_run(db, config)
     genome = json.loads(config.make_encoding().random(np.random.default_rng(1)).canonical)
     fitness = [None if n % 5 == 3 else 0.01 * n for n in range(generations * POPULATION)]
-    with db.write() as session:
+    with db.write_session() as session:
         session.execute(
-            insert(Individual),
+            insert(IndividualRow),
             [
                 {
                     "run_id": run.id,

@@ -14,7 +14,7 @@ from sqlalchemy import Text, cast, select
 
 from softevo.api import store
 from softevo.api.db import Database
-from softevo.api.models import Individual
+from softevo.api.models import IndividualRow
 from softevo.api.store.driving import _INSERT_MEMBER, MEMBER_COLUMNS, Landed
 from tests.api.store.test_store import OWNER, driven
 
@@ -34,8 +34,8 @@ def awkward_members() -> list[dict[str, Any]]:
 
 
 def stored(db: Database, run_id: int) -> list[tuple[Any, ...]]:
-    columns = Individual.__table__.c
-    with db.read() as session:
+    columns = IndividualRow.__table__.c
+    with db.read_session() as session:
         rows = session.execute(
             select(
                 columns["index"],
@@ -67,7 +67,7 @@ def test_many_rows_store_what_one_row_at_a_time_stores(db: Database) -> None:
         Landed({4: 1.0, 5: 0.0}, "w{}", 0.3, {4: {"heading": -180.0}}),
     ]
     one_by_one, at_once = driven(db), driven(db)
-    with db.writing() as connection:  # the members one statement each
+    with db.write_connection() as connection:  # the members one statement each
         for index, member in enumerate(awkward_members()):
             row = {"b_run": one_by_one, "b_generation": 0, "b_index": index}
             row |= {f"b_{column}": member[column] for column in MEMBER_COLUMNS}
@@ -86,11 +86,11 @@ def test_many_rows_store_what_one_row_at_a_time_stores(db: Database) -> None:
     assert json.loads(rows[0][7]) == {"heading": 12.5, "energy": None}  # NaN: null
     assert rows[1][5:8] == ("failed", None, "{}")  # no record: an empty one
     assert rows[6][5:] == ("pending", None, None, None, None)
-    with db.read() as session:  # one timestamp for the call, read back as UTC
+    with db.read_session() as session:  # one timestamp for the call, read back as UTC
         times = set(
             session.scalars(
-                select(Individual.evaluated_at).where(
-                    Individual.run_id == at_once, Individual.status != "pending"
+                select(IndividualRow.evaluated_at).where(
+                    IndividualRow.run_id == at_once, IndividualRow.status != "pending"
                 )
             )
         )

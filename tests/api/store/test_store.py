@@ -13,7 +13,7 @@ from sqlalchemy.exc import IntegrityError
 
 from softevo.api import store
 from softevo.api.db import Database
-from softevo.api.models import Generation, Individual
+from softevo.api.models import GenerationRow, IndividualRow
 from softevo.api.store.driving import (
     GenerationCommit,
     GenerationMismatchError,
@@ -47,10 +47,10 @@ def driven(db: Database) -> int:
 
 
 def statuses(db: Database, run_id: int) -> dict[int, tuple[str, float | None]]:
-    with db.read() as session:
+    with db.read_session() as session:
         rows = session.execute(
-            select(Individual.index, Individual.status, Individual.fitness).where(
-                Individual.run_id == run_id
+            select(IndividualRow.index, IndividualRow.status, IndividualRow.fitness).where(
+                IndividualRow.run_id == run_id
             )
         )
         return {index: (status, fitness) for index, status, fitness in rows}
@@ -128,12 +128,17 @@ def test_a_commit_writes_what_landed_and_keeps_the_next_generation(db: Database)
     store.driving.save_fitness(db, run_id, OWNER, 0, [Landed({0: 0.5}, "w1", 0.1)])
     landed = [Landed({1: math.nan}, "w1", 0.1), Landed({2: 0.25}, "w2", 0.3)]
     commit(db, run_id, OWNER, done=False, landed=landed, upcoming=members("n"))
-    columns = (Individual.genome_hash, Individual.status, Individual.fitness, Individual.worker)
-    with db.read() as session:
+    columns = (
+        IndividualRow.genome_hash,
+        IndividualRow.status,
+        IndividualRow.fitness,
+        IndividualRow.worker,
+    )
+    with db.read_session() as session:
         rows = session.execute(
             select(*columns)
-            .where(Individual.run_id == run_id)
-            .order_by(Individual.generation, Individual.index)
+            .where(IndividualRow.run_id == run_id)
+            .order_by(IndividualRow.generation, IndividualRow.index)
         ).all()
     assert [tuple(row) for row in rows[:4]] == [
         ("x0", IndividualStatus.EVALUATED, 0.5, "w1"),
@@ -155,8 +160,8 @@ def test_the_last_commit_keeps_no_next_generation(db: Database) -> None:
     store.driving.keep_generation(db, run_id, OWNER, 0, members())
     commit(db, run_id, OWNER, done=True, upcoming=members("n"))
     assert store.get_run(db, run_id).status == RunStatus.COMPLETED
-    with db.read() as session:
-        assert session.scalar(select(func.max(Individual.generation))) == 0
+    with db.read_session() as session:
+        assert session.scalar(select(func.max(IndividualRow.generation))) == 0
 
 
 def test_a_commit_is_all_or_nothing(db: Database) -> None:
@@ -167,8 +172,8 @@ def test_a_commit_is_all_or_nothing(db: Database) -> None:
         commit(db, run_id, OWNER, done=True)
     record = store.get_run(db, run_id)
     assert record.status == RunStatus.RUNNING and record.evaluations == 3  # not 6
-    with db.read() as session:
-        assert session.scalar(select(func.count()).select_from(Generation)) == 1
+    with db.read_session() as session:
+        assert session.scalar(select(func.count()).select_from(GenerationRow)) == 1
 
 
 def test_a_coordinator_that_lost_its_lease_writes_nothing(db: Database) -> None:
