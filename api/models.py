@@ -9,7 +9,7 @@ row, so a second fitness for the same individual is impossible.
 from __future__ import annotations
 
 from datetime import UTC, datetime
-from typing import Any, ClassVar
+from typing import Any, ClassVar, cast
 
 from sqlalchemy import (
     JSON,
@@ -20,6 +20,7 @@ from sqlalchemy import (
     Index,
     Integer,
     String,
+    Table,
     Text,
     TypeDecorator,
     UniqueConstraint,
@@ -136,3 +137,10 @@ class IndividualRow(Base):
     eval_seconds: Mapped[float | None] = mapped_column(Float)
     worker: Mapped[str | None] = mapped_column(String(128))
     evaluated_at: Mapped[datetime | None] = mapped_column()
+
+
+# The rows' tables for Core statements (the driver's, run several times a generation, skip the
+# ORM's per-statement work); `__table__` is typed as any FromClause, these are tables.
+RUNS = cast(Table, RunRow.__table__)
+GENERATIONS = cast(Table, GenerationRow.__table__)
+INDIVIDUALS = cast(Table, IndividualRow.__table__)

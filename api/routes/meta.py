@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from fastapi import APIRouter, Response
 
 from softevo.api.coordinator import Coordinator
@@ -48,7 +50,10 @@ def healthz(
     if not healthy:
         response.status_code = 503
     workers = idle_workers(coordinator, settings)
-    internals = {"owner": coordinator.owner, "driving": coordinator.active}
+    internals: dict[str, Sequence[object]] | None = {
+        "owner": coordinator.owner,
+        "driving": coordinator.active,
+    }
     if not trusted:
         database, redis, internals = database.split(":")[0], redis.split(":")[0], None
     return Health(

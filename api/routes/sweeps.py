@@ -35,12 +35,15 @@ def _public(sweep: dict[str, Any], runs: list[store.RunRecord]) -> SweepPublic:
     by_task = bool(sweep["request"].get("tasks"))
     boxes: dict[tuple[str | None, tuple[int, int, int]], list[store.RunRecord]] = {}
     for run in runs:
-        key = (run.preset if by_task else None, tuple(run.config["shape"]))
-        boxes.setdefault(key, []).append(run)  # type: ignore[arg-type]
+        nx, ny, nz = run.config["shape"]
+        boxes.setdefault((run.preset if by_task else None, (nx, ny, nz)), []).append(run)
     out = []
     for (task, shape), members in boxes.items():
-        best = [r.best_fitness for r in members if r.status == RunStatus.COMPLETED]
-        best = [b for b in best if b is not None]
+        best = [
+            r.best_fitness
+            for r in members
+            if r.status == RunStatus.COMPLETED and r.best_fitness is not None
+        ]
         out.append(
             SweepBox(
                 shape=shape,
@@ -56,7 +59,7 @@ def _public(sweep: dict[str, Any], runs: list[store.RunRecord]) -> SweepPublic:
         )
     return SweepPublic(
         id=sweep["id"],
-        status=_status([r.status for r in runs]),  # type: ignore[arg-type]
+        status=_status([r.status for r in runs]),
         created_at=sweep["created_at"],
         request=sweep["request"],
         boxes=out,
@@ -86,7 +89,7 @@ def create_sweep(
         raise RequestError(["preset"], "give tasks or a preset, not both: each task is a preset")
     tasks: list[str | None] = list(dict.fromkeys(body.tasks)) if body.tasks else [None]
     shapes: list[tuple[int, int, int] | None] = (
-        list(dict.fromkeys(tuple(s) for s in body.shapes))
+        list(dict.fromkeys((nx, ny, nz) for nx, ny, nz in body.shapes))
         if not body.tasks or "shapes" in given
         else [None]  # each task's own box
     )

@@ -29,10 +29,10 @@ def stored_births(
             ).where(columns.run_id == run_id, columns.generation >= since)
         ).all()
     return {
-        (row.generation, row.index): (
-            row.genome_hash,
-            None if row.status == _PENDING else from_null(row.fitness),
-            {} if row.status == _PENDING else from_null_record(row.measures),
+        (generation, index): (
+            genome_hash,
+            None if status == _PENDING else from_null(fitness),
+            {} if status == _PENDING else from_null_record(measures),
         )
-        for row in rows
+        for generation, index, genome_hash, status, fitness, measures in rows
     }

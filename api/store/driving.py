@@ -16,7 +16,7 @@ from typing import Any
 from sqlalchemy import Connection, bindparam, insert, select, update
 
 from softevo.api.db import Database, EncodedJSON
-from softevo.api.models import GenerationRow, IndividualRow, RunRow
+from softevo.api.models import GENERATIONS, INDIVIDUALS, RUNS, IndividualRow, RunRow
 from softevo.api.store import leases
 from softevo.api.store.runs import now
 from softevo.api.store.statements import DriverStatement
@@ -37,9 +37,6 @@ CURVE_FIELDS = (
     "evaluations",
     "saved",
 )
-# Core tables: the driver's statements skip the ORM's per-statement work (they run several times
-# a generation, for every run this process drives).
-INDIVIDUALS, GENERATIONS, RUNS = IndividualRow.__table__, GenerationRow.__table__, RunRow.__table__
 _PENDING = IndividualStatus.PENDING.value
 
 

@@ -13,7 +13,7 @@ from typing import Any
 from sqlalchemy import Connection, func, insert, inspect, select, update
 
 from softevo.api.db import Database, EncodedJSON
-from softevo.api.models import GenerationRow, IndividualRow, RunRow
+from softevo.api.models import GENERATIONS, INDIVIDUALS, GenerationRow, IndividualRow, RunRow
 from softevo.api.store.driving import CURVE_FIELDS
 from softevo.api.store.runs import now
 from softevo.core.config import RunConfig
@@ -81,7 +81,10 @@ def release(db: Database, run_id: int, owner: str) -> None:
 
 def db_config(db: Database, run_id: int) -> dict[str, Any]:
     with db.read_session() as session:
-        return dict(session.scalar(select(RunRow.config).where(RunRow.id == run_id)))
+        config = session.scalar(select(RunRow.config).where(RunRow.id == run_id))
+    if config is None:
+        raise KeyError(run_id)
+    return dict(config)
 
 
 def totals(db: Database, run_id: int) -> tuple[int, int, int, float]:
@@ -191,7 +194,7 @@ def _insert_curve(connection: Connection, run_id: int, state: GAState) -> None:
     if not state.history:
         return
     connection.execute(
-        insert(GenerationRow.__table__),
+        insert(GENERATIONS),
         [
             {
                 "run_id": run_id,
@@ -223,7 +226,7 @@ def _insert_individuals(
     if not (cached or listed):
         return
     connection.execute(
-        insert(IndividualRow.__table__),
+        insert(INDIVIDUALS),
         [
             {
                 "run_id": run_id,

@@ -11,16 +11,25 @@ from __future__ import annotations
 
 import time
 
-from sqlalchemy import Connection, bindparam, case, or_, select, update
+from sqlalchemy import (
+    BindParameter,
+    ColumnElement,
+    Connection,
+    bindparam,
+    case,
+    or_,
+    select,
+    update,
+)
 
-from softevo.api.db import Database
-from softevo.api.models import RunRow
+from softevo.api.db import Database, rowcount
+from softevo.api.models import RUNS, RunRow
 from softevo.api.store.runs import now
 from softevo.api.store.statements import DriverStatement
 from softevo.core.status import RunStatus
 
 
-def _orphaned(at: float):  # type: ignore[no-untyped-def]
+def _orphaned(at: float | BindParameter[float]) -> ColumnElement[bool]:
     return or_(
         RunRow.status == RunStatus.QUEUED,
         (RunRow.status == RunStatus.RUNNING)
@@ -63,15 +72,15 @@ def acquire(db: Database, run_id: int, owner: str, seconds: float, at: float | N
                 ),
             )
         )
-        return result.rowcount == 1
+        return rowcount(result) == 1
 
 
 _RENEW = DriverStatement(
-    update(RunRow.__table__)
+    update(RUNS)
     .where(
-        RunRow.__table__.c.id == bindparam("b_run"),
-        RunRow.__table__.c.lease_owner == bindparam("b_owner"),
-        RunRow.__table__.c.status == RunStatus.RUNNING.value,
+        RUNS.c.id == bindparam("b_run"),
+        RUNS.c.lease_owner == bindparam("b_owner"),
+        RUNS.c.status == RunStatus.RUNNING.value,
     )
     .values(lease_expires=bindparam("b_expires"))
 )

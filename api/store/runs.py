@@ -15,7 +15,7 @@ import numpy as np
 from sqlalchemy import func, select, update
 from sqlalchemy.orm import defer
 
-from softevo.api.db import Database
+from softevo.api.db import Database, rowcount
 from softevo.api.models import GenerationRow, IndividualRow, RunRow, Sweep
 from softevo.core.config import RunConfig
 from softevo.core.nulls import to_null
@@ -178,16 +178,18 @@ def cancel_run(db: Database, run_id: int) -> RunRecord:
     conditional update: a run that completes at the same moment stays completed."""
     active = [status.value for status in ACTIVE]
     with db.write_session() as session:
-        changed = session.execute(
-            update(RunRow)
-            .where(RunRow.id == run_id, RunRow.status.in_(active))
-            .values(
-                status=RunStatus.CANCELLED.value,
-                finished_at=now(),
-                lease_owner=None,
-                lease_expires=None,
+        changed = rowcount(
+            session.execute(
+                update(RunRow)
+                .where(RunRow.id == run_id, RunRow.status.in_(active))
+                .values(
+                    status=RunStatus.CANCELLED.value,
+                    finished_at=now(),
+                    lease_owner=None,
+                    lease_expires=None,
+                )
             )
-        ).rowcount
+        )
         if changed != 1:
             status = session.scalar(select(RunRow.status).where(RunRow.id == run_id))
             if status is None:

@@ -54,7 +54,7 @@ def run_public(db: Database, run: store.RunRecord, problem: str | None = None) -
         eta = per_generation * (run.generations_total - run.generations_done)
     return RunPublic(
         id=run.id,
-        status=run.status,  # type: ignore[arg-type]
+        status=run.status,
         problem=problem,
         preset=run.preset,
         seed=run.seed,
@@ -178,7 +178,7 @@ def get_curve(
             media_type="text/csv",
             headers={"Content-Disposition": f'attachment; filename="run-{run_id}-curve.csv"'},
         )
-    return Curve(run_id=run_id, generations=rows)  # type: ignore[arg-type]
+    return Curve(run_id=run_id, generations=rows)
 
 
 @router.get("/{run_id}/individuals", responses=NOT_FOUND)
@@ -194,7 +194,7 @@ def list_individuals(
     items, total = store.list_individuals(db, run, generation, offset, limit)
     return IndividualPage(
         run_id=run_id,
-        items=items,  # type: ignore[arg-type]
+        items=items,
         total=total,
         offset=offset,
         limit=limit,
