@@ -89,17 +89,20 @@ class Result:
             saved=evolution.saved,
             wall_seconds=round(evolution.elapsed, 3),
             measures=measures,
-            best_measures=None if best is None else measures.get(best_hash, {}),
+            best_measures=None if best_hash is None else measures.get(best_hash, {}),
             front=_front(evolution, measures),
         )
 
     def to_json(self) -> dict[str, Any]:
         """What `softevo run --json` prints (but its `out`)."""
-        best = None
+        best: dict[str, Any] | None = None
         if self.best is not None:
-            best = {"speed": self.best_fitness, "generation": self.best_generation}
-            best["measures"] = self.best_measures
-            best["robot"] = self.best
+            best = {
+                "speed": self.best_fitness,
+                "generation": self.best_generation,
+                "measures": self.best_measures,
+                "robot": self.best,
+            }
         return {
             "run": self.config,
             "generations": self.curve,
@@ -121,7 +124,7 @@ def _front(
         {"genome_hash": key, "fitness": to_null(evolution.cache.get(key)), "measures": record}
         for key, record in sorted(measures.items())
     ]
-    return list(front_rows(specs, rows))
+    return front_rows(specs, rows)
 
 
 class Run:

@@ -10,7 +10,7 @@ appeared. A failed row (no fitness, or an objective not measured) is on no front
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -18,6 +18,8 @@ from softevo.core.search import pareto
 from softevo.core.search.vectors import ObjectiveSpec, objective_values
 
 Row = Mapping[str, Any]
+#: a row of the caller's own type (a dict, a mapping), given back as it came
+R = TypeVar("R", bound=Row)
 
 
 def front_values(specs: Sequence[ObjectiveSpec], rows: Sequence[Row]) -> np.ndarray:
@@ -30,14 +32,14 @@ def front_values(specs: Sequence[ObjectiveSpec], rows: Sequence[Row]) -> np.ndar
     return objective_values(specs, records, fitness).reshape(len(rows), max(1, len(specs)))
 
 
-def front_rows(specs: Sequence[ObjectiveSpec], rows: Iterable[Row], chunk: int = 4096) -> list[Row]:
+def front_rows(specs: Sequence[ObjectiveSpec], rows: Iterable[R], chunk: int = 4096) -> list[R]:
     """The rows on the front, in their order: no other row dominates them. Rows are read
     `chunk` at a time and only the front so far is kept, so memory follows the front, not the
     run. A row whose `genome_hash` is already on the front is the same robot again and left
     out (a copy whose first appearance was dominated is dominated too)."""
-    front: list[Row] = []
+    front: list[R] = []
     on_front: set[str] = set()
-    batch: list[Row] = []
+    batch: list[R] = []
     for row in rows:
         genome_hash = row.get("genome_hash")
         if genome_hash is not None:
@@ -54,7 +56,7 @@ def front_rows(specs: Sequence[ObjectiveSpec], rows: Iterable[Row], chunk: int =
     return front
 
 
-def _merged(specs: Sequence[ObjectiveSpec], front: list[Row], batch: list[Row]) -> list[Row]:
+def _merged(specs: Sequence[ObjectiveSpec], front: list[R], batch: list[R]) -> list[R]:
     """The non-dominated rows of the front so far and the next batch, in order."""
     candidates = [*front, *batch]
     mask = pareto.nondominated_mask(front_values(specs, candidates))

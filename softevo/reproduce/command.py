@@ -50,6 +50,7 @@ def reproduce(args: argparse.Namespace) -> int:
             experiments.submit_all()
             experiments.wait()
             figure4 = write_figures(experiments, out)
+            assert experiments.sweep_id is not None, "submit_all() submits the sweep"
             sweep = client.get_sweep(experiments.sweep_id).status()
             rows = experiments.rows()
             longer = champions(experiments, out)
