@@ -26,6 +26,7 @@ class HeaderDeadline(H11Protocol):
     header_seconds: float = 10.0
     _head_timer: asyncio.TimerHandle | None = None
 
+    # uvicorn's protocol is given a Transport, though asyncio types it as a BaseTransport
     def connection_made(self, transport: asyncio.Transport) -> None:  # type: ignore[override]
         super().connection_made(transport)
         self._arm()

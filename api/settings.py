@@ -80,6 +80,7 @@ class Settings:
             raw = env.get(f"SOFTEVO_{item.name.upper()}")
             if raw is not None and raw != "":
                 limits[item.name] = _parse(f"SOFTEVO_{item.name.upper()}", raw, item.type)
+        # values parsed by each field's own type (_parse), which a checker cannot follow
         settings = cls(**values, limits=Limits(**limits))  # type: ignore[arg-type]
         for name in ("max_running", "batch_size", "queued_batches"):
             if getattr(settings, name) < 1:

@@ -83,3 +83,41 @@ def test_no_source_file_over_400_lines_and_no_function_over_60() -> None:
                     if lines > 60 and (name, node.name) not in kernels:
                         long_functions.append(f"{name}:{node.name} ({lines})")
     assert long_files == [] and long_functions == []
+
+
+#: what mypy checks (scripts/lint.sh), and everything else of ours in Python
+CHECKED = ("core", "api", "worker", "softevo", "migrations")
+ALL = (*CHECKED, "tests", "bench", "scripts", "examples")
+
+
+def _python_files(folders: tuple[str, ...] = ALL) -> list[Path]:
+    return sorted(path for folder in folders for path in (ROOT / folder).rglob("*.py"))
+
+
+def test_the_code_is_as_the_formatter_writes_it() -> None:
+    """No opt-outs from `ruff format`: a long module is split by meaning, not packed by hand."""
+    pragma = "fmt: " + "skip"  # spelled apart so that this file holds none
+    offenders = [
+        f"{path.relative_to(ROOT)}:{number}"
+        for path in _python_files()
+        for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+        if pragma in line or "fmt: " + "off" in line
+    ]
+    assert offenders == []
+
+
+def test_every_type_ignore_says_why() -> None:
+    """A `# type: ignore[code]` in what mypy checks names its code and gives its reason after it
+    or on the line above."""
+    offenders = []
+    for path in _python_files(CHECKED):
+        lines = path.read_text(encoding="utf-8").splitlines()
+        for number, line in enumerate(lines, 1):
+            if "type: " + "ignore" not in line:
+                continue
+            after = line.split("type: " + "ignore", 1)[1]
+            coded = after.startswith("[")
+            reason = "#" in after or (number > 1 and lines[number - 2].strip().startswith("#"))
+            if not (coded and reason):
+                offenders.append(f"{path.relative_to(ROOT)}:{number}")
+    assert offenders == []

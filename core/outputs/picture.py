@@ -156,7 +156,7 @@ def _draw(scene: _Scene, ax: Any, positions: np.ndarray, clock: str | None) -> N
     )
     ax.add_collection(
         PolyCollection(
-            screen,  # type: ignore[arg-type]
+            screen,  # type: ignore[arg-type]  # an array [N, 4, 2], as above
             facecolors=colours,
             edgecolors=(0, 0, 0, 0.35),
             linewidths=0.4,
@@ -291,9 +291,9 @@ def movie(robot: Robot, format: str, fps: float = FPS, seconds: float = SECONDS)
     drawing = _Frames(scene, ax)
     # matplotlib's stubs say int; both writers take a float (12.5 frames a second is allowed)
     writer = (
-        PillowWriter(fps=fps)  # type: ignore[arg-type]
+        PillowWriter(fps=fps)  # type: ignore[arg-type]  # a float fps, as above
         if format == "gif"
-        else FFMpegWriter(fps=fps, codec="h264")  # type: ignore[arg-type]
+        else FFMpegWriter(fps=fps, codec="h264")  # type: ignore[arg-type]  # as above
     )
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / f"picture.{format}"

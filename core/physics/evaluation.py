@@ -114,7 +114,8 @@ def _release_fork_server() -> None:
     if fd is not None:
         with contextlib.suppress(OSError):
             os.close(fd)
-        server._forkserver_alive_fd = None  # type: ignore[union-attr]
+        if server is not None:
+            server._forkserver_alive_fd = None
 
 
 def start_pool_process() -> None:
@@ -243,7 +244,8 @@ class PoolEvaluator(Evaluator):
                         self._pool = self._new_pool()
             finally:
                 with self._lock:
-                    self._batches.pop(future, None)  # type: ignore[arg-type]
+                    if future is not None:
+                        self._batches.pop(future, None)
 
     def drop(self, key_prefix: str) -> None:
         with self._lock:

@@ -330,4 +330,6 @@ def simulate_batch(
     else:
         with ThreadPoolExecutor(max_workers=threads) as pool:
             list(pool.map(run, chunks))
-    return results  # type: ignore[return-value]
+    done = [result for result in results if result is not None]
+    assert len(done) == len(mechs), "every chunk ran"
+    return done
