@@ -216,7 +216,7 @@ def configure(config: dict[str, Any] | RunConfig | None = None, **settings: Any)
         raise ConfigError(f"run config: expected an object, got {type(config).__name__}")
     if isinstance(request.get("sim"), dict) and isinstance(settings.get("sim"), dict):
         settings["sim"] = {**request["sim"], **settings["sim"]}
-    return resolve({**request, **settings})
+    return resolve({**request, **settings}, new=True)
 
 
 def start(

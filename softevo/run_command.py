@@ -67,6 +67,14 @@ def add_parser(commands: Any) -> None:
     run.add_argument(
         "--generations", type=int, metavar="G", help="generations (with --resume: go on to G)"
     )
+    run.add_argument(
+        "--max-simulations",
+        type=int,
+        metavar="N",
+        dest="max_simulations",
+        help="a budget in simulations: the run ends at the first generation (or steady-state "
+        "row) whose simulations so far reach N, or at --generations, whichever comes first",
+    )
     run.add_argument("--duration", type=float, metavar="S", help="simulated seconds per robot")
     run.add_argument(
         "--objective", choices=list(OBJECTIVES),
@@ -135,7 +143,7 @@ def _search_arguments(run: argparse.ArgumentParser) -> None:
 def _request(args: argparse.Namespace) -> dict[str, Any]:
     request: dict[str, Any] = {"preset": args.preset or "quick", "seed": args.seed or 0}
     for name in ("shape", "encoding", "population", "generations", "algorithm", "options",
-                 "descriptors", "bins", "objectives"):  # fmt: skip
+                 "descriptors", "bins", "objectives", "max_simulations"):  # fmt: skip
         if getattr(args, name) is not None:
             request[name] = getattr(args, name)
     if args.objective is not None:
@@ -236,7 +244,7 @@ def _folder(args: argparse.Namespace) -> Folder:
         except (OSError, SQLAlchemyError) as error:  # a full disk while importing a folder
             args.parser.error(f"--resume {folder}: cannot write its store ({_reason(error)})")
     try:
-        config = resolve(_request(args))
+        config = resolve(_request(args), new=True)
     except ConfigError as error:
         args.parser.error(str(error))
     for note in breeding_notes(config):
@@ -257,7 +265,7 @@ def _reason(error: BaseException) -> str:
 
 _CONFIG_FLAGS = ("preset", "shape", "encoding", "seed", "population", "duration", "objective",
                  "objectives", "terrain", "algorithm", "options", "descriptors",
-                 "bins")  # fmt: skip
+                 "bins", "max_simulations")  # fmt: skip
 
 
 def run_command(args: argparse.Namespace) -> int:
