@@ -26,7 +26,9 @@ from typing import Any
 import numpy as np
 
 from softevo import library
+from softevo.core.config import resolve
 from softevo.core.search import pareto
+from softevo.core.search.evolution import Evolution
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "docs" / "experiments" / "search"
@@ -82,31 +84,42 @@ def trade_off(preset: str, method: dict[str, Any], seed: int, args: argparse.Nam
     return {"rows": rows, "seconds": time.perf_counter() - started, "config": run.config.to_json()}
 
 
-def window_run(window: int | None, seed: int, args: argparse.Namespace) -> dict:
-    """Steady-state (W births in flight) or, with None, the paper's GA: the curve against
-    simulations and wall time."""
-    config: dict[str, Any] = {
+def window_run(window: int | None, seed: int, args: argparse.Namespace, rq: str | None) -> dict:
+    """Steady-state (W births in flight) or, with None, the paper's GA, on the local pool or
+    (`rq`, a Redis URL) on the RQ workers serving it: best so far against simulations and wall
+    time."""
+    request: dict[str, Any] = {
         "preset": "paper-voxel",
         "shape": [4, 4, 4],
         "seed": seed,
         "generations": 10_000,
-        "max_simulations": args.budget,
+        "max_simulations": args.window_budget,
         "sim": {"duration": args.duration},
     }
     if window is not None:
-        config = {**config, "algorithm": "steady-state", "options": {"window": window}}
-    run = library.start(config, workers=args.workers)
-    rows, simulations, started = [], 0, time.perf_counter()
-    for row in run:
-        simulations += row["evaluations"]
-        rows.append(
-            {
-                "simulations": simulations,
-                "seconds": time.perf_counter() - started,
-                "best": row["best_so_far"],
-            }
-        )
-    run.close()
+        request = {**request, "algorithm": "steady-state", "options": {"window": window}}
+    evolution = Evolution.start(resolve(request, new=True))
+    if rq is None:
+        from softevo.core.physics.evaluation import make_evaluator
+
+        evaluator = make_evaluator(args.workers)
+    else:
+        from softevo.worker.evaluator import RQEvaluator
+
+        evaluator = RQEvaluator(rq)
+    rows, started = [], time.perf_counter()
+    try:
+        while not evolution.done:
+            row = evolution.step(evaluator)
+            rows.append(
+                {
+                    "simulations": evolution.evaluations,
+                    "best": row.best_so_far,
+                    "seconds": time.perf_counter() - started,
+                }
+            )
+    finally:
+        evaluator.close()
     return {"rows": rows}
 
 
@@ -144,13 +157,17 @@ def run_trade_off(args: argparse.Namespace, results: dict[str, Any]) -> None:
 
 
 def run_windows(args: argparse.Namespace, results: dict[str, Any]) -> None:
+    """GA and W = P, 2P, 4P on every seed, on the local pool and (with --rq) on RQ workers."""
     population = 25
-    for seed in args.seeds:
-        found = {"GA": window_run(None, seed, args)}
-        for k in (1, 2, 4):
-            found[f"W={k}P"] = window_run(k * population, seed, args)
-        results.setdefault("window", {})[str(seed)] = found
-        print(f"window seed {seed} done", flush=True)
+    for where, rq in (("local", None), ("rq", args.rq)):
+        if where == "rq" and rq is None:
+            continue
+        for seed in args.seeds:
+            found = {"GA": window_run(None, seed, args, rq)}
+            for k in (1, 2, 4):
+                found[f"W={k}P"] = window_run(k * population, seed, args, rq)
+            results.setdefault("window", {}).setdefault(where, {})[str(seed)] = found
+            print(f"window {where} seed {seed} done", flush=True)
 
 
 def main() -> None:
@@ -159,6 +176,13 @@ def main() -> None:
     parser.add_argument("--budget", type=int, default=300, help="simulations per run")
     parser.add_argument("--duration", type=float, default=4.0, help="simulated seconds")
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--window-budget", type=int, default=600, help="simulations, window")
+    parser.add_argument(
+        "--rq",
+        metavar="URL",
+        help="also run the window part on the RQ workers of this Redis "
+        "(start them first: softevo worker --url URL, twice)",
+    )
     parser.add_argument("--part", choices=("trade-off", "window", "all"), default="all")
     parser.add_argument("--out", type=Path, default=OUT)
     args = parser.parse_args()

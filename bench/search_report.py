@@ -44,25 +44,31 @@ def trade_off_table(results: dict[str, Any]) -> list[str]:
 
 
 def window_table(results: dict[str, Any]) -> list[str]:
-    lines = [
-        "\nwindow: simulations and seconds to reach the GA's final best speed (seed: sims/s)",
-        "| method | by seed | reached |",
-        "| --- | --- | ---: |",
-    ]
-    seeds = results.get("window", {})
-    if not seeds:
-        return []
-    for name in next(iter(seeds.values())):
-        cells, reached = [], 0
-        for seed, found in seeds.items():
-            target = found["GA"]["rows"][-1]["best"]
-            hit = next((row for row in found[name]["rows"] if row["best"] >= target), None)
-            reached += hit is not None
-            cells.append(
-                f"{seed}: "
-                + (f"{hit['simulations']}/{hit['seconds']:.0f}s" if hit else "not reached")
+    """Simulations and seconds until best so far reaches that seed's GA's final best."""
+    lines = []
+    for where, seeds in results.get("window", {}).items():
+        lines += [
+            f"\nwindow, {where}: simulations / seconds to the GA's final best, by seed",
+            "| method | by seed | mean simulations | mean seconds | reached |",
+            "| --- | --- | ---: | ---: | ---: |",
+        ]
+        for name in next(iter(seeds.values())):
+            cells, hits = [], []
+            for seed, found in seeds.items():
+                target = found["GA"]["rows"][-1]["best"]
+                hit = next((r for r in found[name]["rows"] if r["best"] >= target), None)
+                cells.append(
+                    f"{seed}: {hit['simulations']}/{hit['seconds']:.0f}s"
+                    if hit
+                    else f"{seed}: not reached"
+                )
+                hits += [hit] if hit else []
+            sims = statistics.mean(h["simulations"] for h in hits) if hits else float("nan")
+            secs = statistics.mean(h["seconds"] for h in hits) if hits else float("nan")
+            lines.append(
+                f"| {name} | {'; '.join(cells)} | {sims:.0f} | {secs:.1f} | "
+                f"{len(hits)} of {len(seeds)} |"
             )
-        lines.append(f"| {name} | {'; '.join(cells)} | {reached} of {len(seeds)} |")
     return lines
 
 
@@ -97,24 +103,27 @@ def figures(results: dict[str, Any], out: Path) -> None:
         fig.tight_layout()
         fig.savefig(out / "hypervolume.png", dpi=100)
         plt.close(fig)
-    seeds = results.get("window", {})
-    if seeds:
-        fig, ax = plt.subplots(figsize=(6, 4))
-        names = next(iter(seeds.values()))
-        _lines(
-            ax,
-            {
-                name: [
-                    (
-                        [r["simulations"] for r in found[name]["rows"]],
-                        [r["best"] for r in found[name]["rows"]],
-                    )
-                    for found in seeds.values()
-                ]
-                for name in names
-            },
-        )
-        ax.set(xlabel="simulations", ylabel="best speed so far (m/s)", title="4x4x4")
+    windows = results.get("window", {})
+    if windows:
+        fig, axes = plt.subplots(1, len(windows), figsize=(6 * len(windows), 4), squeeze=False)
+        for ax, (where, seeds) in zip(axes[0], windows.items(), strict=True):
+            names = next(iter(seeds.values()))
+            _lines(
+                ax,
+                {
+                    name: [
+                        (
+                            [r["seconds"] for r in found[name]["rows"]],
+                            [r["best"] for r in found[name]["rows"]],
+                        )
+                        for found in seeds.values()
+                    ]
+                    for name in names
+                },
+            )
+            ax.set(
+                xlabel="wall time (s)", ylabel="best speed so far (m/s)", title=f"4x4x4, {where}"
+            )
         fig.tight_layout()
         fig.savefig(out / "window.png", dpi=100)
         plt.close(fig)
