@@ -49,6 +49,8 @@ def methods() -> dict[str, dict[str, Any]]:
     for w in WEIGHTS:
         found[f"GA w={w:g}"] = {"options": {"weights": [w / SPEED_SCALE, (1 - w) / COT_SCALE]}}
     found["random"] = {"algorithm": "random"}
+    # the variation's effect: NSGA-II with the paper's operators, as runs stored before issue 51
+    found["NSGA-II paper"] = {"algorithm": "nsga2", "options": {"variation": "paper"}}
     return found
 
 
@@ -139,21 +141,21 @@ def bounds(runs: list[dict]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def run_trade_off(args: argparse.Namespace, results: dict[str, Any]) -> None:
+    """Every method on every task and seed (those already in `results` kept), each scored in
+    the box of all of that task's and seed's final fronts."""
     for preset in TASKS:
         for seed in args.seeds:
-            runs = {}
+            kept = results.setdefault("trade_off", {}).setdefault(preset, {})
+            runs = kept.get(str(seed), {}).get("runs", {})
             for name, method in methods().items():
-                runs[name] = trade_off(preset, method, seed, args)
-                print(f"{preset} seed {seed} {name}: {runs[name]['seconds']:.0f} s", flush=True)
+                if name not in runs:
+                    runs[name] = trade_off(preset, method, seed, args)
+                    runs[name].pop("config")
+                    print(f"{preset} seed {seed} {name}: {runs[name]['seconds']:.0f} s", flush=True)
             ideal, nadir = bounds(list(runs.values()))
             for run in runs.values():
                 run["normalised"] = normalised(run["rows"], ideal, nadir)
-                del run["config"]
-            results.setdefault("trade_off", {}).setdefault(preset, {})[str(seed)] = {
-                "ideal": ideal.tolist(),
-                "nadir": nadir.tolist(),
-                "runs": runs,
-            }
+            kept[str(seed)] = {"ideal": ideal.tolist(), "nadir": nadir.tolist(), "runs": runs}
 
 
 def run_windows(args: argparse.Namespace, results: dict[str, Any]) -> None:
@@ -189,12 +191,14 @@ def main() -> None:
     args.out.mkdir(parents=True, exist_ok=True)
     path = args.out / "results.json"
     results: dict[str, Any] = json.loads(path.read_text()) if path.exists() else {}
-    results["settings"] = {
+    settings = {
         "budget": args.budget,
+        "window_budget": args.window_budget,
         "duration": args.duration,
         "workers": args.workers,
         "seeds": args.seeds,
     }
+    results.setdefault("settings", {})[args.part] = settings
     if args.part in ("trade-off", "all"):
         run_trade_off(args, results)
         path.write_text(json.dumps(results))

@@ -86,8 +86,10 @@ def test_new_runs_explore_and_stored_configs_keep_their_variation() -> None:
     assert resolve({"preset": "quick"}, new=True).options == {}  # the GA: as it was
 
 
-def test_max_simulations_ends_the_run_at_the_first_row_reaching_it() -> None:
+@pytest.mark.parametrize("algorithm", ["ga", "steady-state"])
+def test_max_simulations_ends_the_run_at_the_first_row_reaching_it(algorithm: str) -> None:
     request = {
+        "algorithm": algorithm,
         "preset": "quick",
         "shape": [2, 2, 2],
         "population": 6,
