@@ -145,7 +145,7 @@ class Run:
 
     @property
     def done(self) -> bool:
-        """Every generation of the config has run."""
+        """Every generation of the config has run, or its `max_simulations` are reached."""
         return self.evolution.done
 
     def _evaluate_with(self) -> Evaluator:
@@ -160,7 +160,13 @@ class Run:
     def step(self) -> dict[str, Any]:
         """Evaluate the next generation; its curve row. RuntimeError once the run is done."""
         if self.done:
-            raise RuntimeError(f"the run is done: all {self.config.generations} generations ran")
+            if self.evolution.state.generation >= self.config.generations:
+                raise RuntimeError(
+                    f"the run is done: all {self.config.generations} generations ran"
+                )
+            raise RuntimeError(
+                f"the run is done: its max_simulations ({self.config.max_simulations}) ran"
+            )
         self.evolution.step(self._evaluate_with())
         return self.evolution.curve()[-1]
 
