@@ -60,10 +60,14 @@ def cost_factor(config: RunConfig) -> float:
 
 
 def run_cost(config: RunConfig) -> Cost:
-    """The most one run can cost: every individual of every generation simulated, the genomes
+    """The most one run can cost: every individual of every generation simulated (with
+    `max_simulations`, at most that and the row that passes it; all of them stored), the genomes
     its strategy's state holds (`Strategy.state_genomes`), and with descriptors an archive with
     as many elites as it has cells (or individuals, if fewer)."""
     individuals = config.population * config.generations
+    simulated = individuals  # repeats of a genome are stored but not simulated again
+    if config.max_simulations is not None:  # the run ends at the row reaching it: a row more
+        simulated = min(individuals, config.max_simulations + config.population)
     encoding = config.make_encoding()
     genome_bytes = getattr(encoding, "genome_bytes", None) or (
         2 * len(encoding.alphabet) + 20 * len(encoding.real_bounds) + 60
@@ -71,7 +75,7 @@ def run_cost(config: RunConfig) -> Cost:
     elites = min(math.prod(config.bins), individuals) if config.descriptors else 0
     elite_bytes = ELITE_BYTES + ELITE_DESCRIPTOR_BYTES * len(config.descriptors) + genome_bytes
     state = strategy_class(config.algorithm).state_genomes(config.ga_config()) * genome_bytes
-    simulations = float(box_springs(config.shape)) * config.sim.n_steps * individuals
+    simulations = float(box_springs(config.shape)) * config.sim.n_steps * simulated
     return Cost(
         spring_steps=simulations * cost_factor(config),
         stored_bytes=float(individuals) * (ROW_BYTES + genome_bytes) + state + elites * elite_bytes,

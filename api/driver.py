@@ -207,18 +207,25 @@ class RunDriver(Hooks):
         stored_config, stored_state = store.driving.load(self.db, self.run_id)
         config = RunConfig.model_validate(stored_config)
         algorithm = make_strategy(config.ga_config(), config.make_encoding())
+        driving = self.driving
         stepper = Stepper(
-            algorithm, config.sim, self.driving.batch_size, self.driving.in_flight, config.objective
+            algorithm,
+            config.sim,
+            driving.batch_size,
+            driving.in_flight,
+            config.objective,
+            config.max_simulations,
         )
         state = GAState.from_json(stored_state) if stored_state else algorithm.start(config.seed)
         cache, measures = store.driving.known_fitness(self.db, self.run_id, state.generation)
-        while not algorithm.done(state):
+        simulations = store.get_run(self.db, self.run_id).evaluations  # of the committed rows
+        while not stepper.done(state, simulations):
             self.check()
             self.generation = state.generation
             step = stepper.step(state, cache, self.driving.evaluator, self, self.key, measures)
-            state = step.state
+            state, simulations = step.state, simulations + step.stats.evaluations
             upcoming: list[Individual] = []
-            done = algorithm.done(state)
+            done = stepper.done(state, simulations)
             if not done and not algorithm.streaming:  # bred now, kept by the same commit
                 upcoming = algorithm.ask(state)
                 state = replace(state, current=upcoming)

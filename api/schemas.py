@@ -12,7 +12,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, StrictInt, create_model
 
-from softevo.core.config import PAPER_NINE_SHAPES, parse_shape
+from softevo.core.config import PAPER_NINE_SHAPES, RunConfig, parse_shape
 from softevo.core.limits import MAX_SIDE
 from softevo.core.objectives import Objective
 from softevo.core.robots.settings import SimSettings
@@ -73,6 +73,12 @@ class _RunSettings(BaseModel):
     )
     cube_options: list[tuple[Number, Number, Number, Number]] | None = Field(
         None, max_length=64, description="the cube's spring options [k, b, w, c] (at most 64)"
+    )
+    max_simulations: StrictInt | None = Field(
+        None,
+        ge=1,
+        le=10**9,
+        description=RunConfig.model_fields["max_simulations"].description,
     )
 
 
@@ -145,6 +151,9 @@ class SweepCreate(RunSettings):
 class RunProgress(BaseModel):
     generation: int = Field(description="generations committed")
     generations: int
+    max_simulations: int | None = Field(
+        None, description="the run's budget in simulations (its config's; null: generations alone)"
+    )
     evaluations: int = Field(description="simulations run (committed generations)")
     saved: int = Field(description="individuals whose fitness came from the run's cache")
     fitness_saved: int = Field(description="individuals with a fitness in the database")

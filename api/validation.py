@@ -32,7 +32,7 @@ class RequestError(ValueError):
 
 def run_config(request: dict[str, Any], limits: Limits, prefix: tuple[str, ...] = ()) -> RunConfig:
     try:
-        config = resolve(request)
+        config = resolve(request, new=True)
     except ConfigError as error:
         message = str(error)
         match = _FIELD.match(message)

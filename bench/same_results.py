@@ -69,6 +69,16 @@ CASES: dict[str, dict[str, Any]] = {
     # the strategies of issues 36-38 (skipped for a tree without them: NEWER)
     "nsga2": {"preset": "quick", "algorithm": "nsga2", "objectives": ["speed", "-energy"], **SHORT},
     "afpo": {"preset": "quick", "algorithm": "afpo", **SHORT},
+    # a new nsga2/afpo run explores (issue 51); a stored one (read by `resolve`, not as a new
+    # run) keeps the paper's operators: these must match the trees before it
+    "nsga2-stored": {
+        "preset": "quick",
+        "algorithm": "nsga2",
+        "objectives": ["speed", "-energy"],
+        "_stored": True,
+        **SHORT,
+    },
+    "afpo-stored": {"preset": "quick", "algorithm": "afpo", "_stored": True, **SHORT},
     "steady-state": {"preset": "quick", "algorithm": "steady-state", **SHORT},
     "steady-archive": {
         "preset": "quick",
@@ -81,7 +91,7 @@ CASES: dict[str, dict[str, Any]] = {
     "cppn": {"preset": "quick", "encoding": "cppn", "shape": [4, 4, 4], **SHORT},
 }
 
-NEWER = {"nsga2", "afpo", "steady-state", "steady-archive", "cppn"}
+NEWER = {"nsga2", "afpo", "nsga2-stored", "afpo-stored", "steady-state", "steady-archive", "cppn"}
 
 ONE = """
 import hashlib, json, sys
@@ -92,7 +102,11 @@ if len(sys.argv) > 2:  # a staged tree: its own strategies, not the installed ch
     own_strategies(Path(sys.argv[2]))
 from softevo import library
 PROFILE_SETTINGS = ("profile", "drag", "material_damping", "contact_damping", "dt_fraction")
-result = library.evolve(json.loads(sys.argv[1]), workers=1)
+config = json.loads(sys.argv[1])
+if config.pop("_stored", False):  # a stored config, as a resumed run reads it
+    from softevo.core.config import resolve
+    config = resolve(config)
+result = library.evolve(config, workers=1)
 digest = lambda value: hashlib.sha256(json.dumps(value, sort_keys=True).encode()).hexdigest()[:16]
 best = result.best
 if best and best.get("sim", {}).get("profile", "paper") == "paper":  # the paper's own settings:

@@ -69,6 +69,14 @@ class RunConfig(GAConfig):
         "speed", description="the measure that is fitness (softevo.core.objectives)"
     )
     cube_options: tuple[CubeOption, ...] = PAPER_CUBE_OPTIONS
+    max_simulations: int | None = Field(
+        None,
+        ge=1,
+        le=10**9,
+        description="a budget in simulations: the run ends at the first row (a generation, or "
+        "a steady-state curve row) whose simulations so far reach it, or at `generations`, "
+        "whichever comes first; null: generations alone",
+    )
 
     @field_validator("shape", mode="before")
     @classmethod
@@ -215,8 +223,27 @@ def _default_map(merged: dict[str, Any], request: dict[str, Any]) -> None:
         merged["bins"] = [qd["bins"][0]] * len(descriptors)
 
 
-def resolve(request: dict[str, Any]) -> RunConfig:
+#: Options a new run of these strategies gets where its request leaves them out; a stored
+#: config (which lists the options it ran with, or none) is read without them, so runs made
+#: before keep their arithmetic. NSGA-II and AFPO explore (issue 51, docs/evolution.md).
+NEW_RUN_OPTIONS: dict[str, dict[str, Any]] = {
+    "nsga2": {"variation": "explore"},
+    "afpo": {"variation": "explore"},
+}
+
+
+def _new_run_options(merged: dict[str, Any]) -> None:
+    """Fill in `NEW_RUN_OPTIONS` for the options a new run's request leaves out."""
+    defaults = NEW_RUN_OPTIONS.get(merged.get("algorithm", "ga"))
+    options = merged.get("options", {})
+    if defaults and isinstance(options, dict):
+        merged["options"] = {**defaults, **options}
+
+
+def resolve(request: dict[str, Any], new: bool = False) -> RunConfig:
     """Merge a preset with overrides and validate; ConfigError names the offending field.
+    `new`: the request starts a run (`POST /runs`, `softevo run`, the library), which gets
+    `NEW_RUN_OPTIONS`; a stored config is resolved without them.
 
     A `sim` that sets the legacy per-step `damping` and names no profile is read in the `paper`
     profile: so is every config stored before profiles existed (they list every setting)."""
@@ -237,6 +264,8 @@ def resolve(request: dict[str, Any]) -> RunConfig:
     if other and "options" not in request:  # the preset's options are its algorithm's
         merged.pop("options", None)
     _default_map(merged, request)
+    if new:
+        _new_run_options(merged)
     sim_overrides = request.get("sim", {})
     if not isinstance(sim_overrides, dict):
         raise ConfigError("sim: expected an object of simulation settings")

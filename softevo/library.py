@@ -148,7 +148,7 @@ class Run:
 
     @property
     def done(self) -> bool:
-        """Every generation of the config has run."""
+        """Every generation of the config has run, or its `max_simulations` are reached."""
         return self.evolution.done
 
     def _evaluate_with(self) -> Evaluator:
@@ -163,7 +163,13 @@ class Run:
     def step(self) -> dict[str, Any]:
         """Evaluate the next generation; its curve row. RuntimeError once the run is done."""
         if self.done:
-            raise RuntimeError(f"the run is done: all {self.config.generations} generations ran")
+            if self.evolution.state.generation >= self.config.generations:
+                raise RuntimeError(
+                    f"the run is done: all {self.config.generations} generations ran"
+                )
+            raise RuntimeError(
+                f"the run is done: its max_simulations ({self.config.max_simulations}) ran"
+            )
         self.evolution.step(self._evaluate_with())
         return self.evolution.curve()[-1]
 
@@ -219,7 +225,7 @@ def configure(config: dict[str, Any] | RunConfig | None = None, **settings: Any)
         raise ConfigError(f"run config: expected an object, got {type(config).__name__}")
     if isinstance(request.get("sim"), dict) and isinstance(settings.get("sim"), dict):
         settings["sim"] = {**request["sim"], **settings["sim"]}
-    return resolve({**request, **settings})
+    return resolve({**request, **settings}, new=True)
 
 
 def start(

@@ -70,6 +70,14 @@ def add_parser(commands: Any) -> None:
     run.add_argument(
         "--generations", type=int, metavar="G", help="generations (with --resume: go on to G)"
     )
+    run.add_argument(
+        "--max-simulations",
+        type=int,
+        metavar="N",
+        dest="max_simulations",
+        help="a budget in simulations: the run ends at the first generation (or steady-state "
+        "row) whose simulations so far reach N, or at --generations, whichever comes first",
+    )
     run.add_argument("--duration", type=float, metavar="S", help="simulated seconds per robot")
     run.add_argument(
         "--objective",
@@ -159,6 +167,7 @@ def _request(args: argparse.Namespace) -> dict[str, Any]:
         "descriptors",
         "bins",
         "objectives",
+        "max_simulations",
     ):
         if getattr(args, name) is not None:
             request[name] = getattr(args, name)
@@ -260,7 +269,7 @@ def _folder(args: argparse.Namespace) -> Folder:
         except (OSError, SQLAlchemyError) as error:  # a full disk while importing a folder
             args.parser.error(f"--resume {folder}: cannot write its store ({_reason(error)})")
     try:
-        config = resolve(_request(args))
+        config = resolve(_request(args), new=True)
     except ConfigError as error:
         args.parser.error(str(error))
     for note in breeding_notes(config):
@@ -293,6 +302,7 @@ _CONFIG_FLAGS = (
     "options",
     "descriptors",
     "bins",
+    "max_simulations",
 )
 
 

@@ -23,7 +23,7 @@ import numpy as np
 from softevo.core.search import pareto
 from softevo.core.search.nsga2 import NSGA2, SurvivorOptions, n_survivors, told_values
 from softevo.core.search.state import GAState, Individual
-from softevo.core.search.variation import mutant
+from softevo.core.search.variation import explore_mutants, mutant
 
 if TYPE_CHECKING:
     from softevo.core.search.algorithm import GAConfig
@@ -67,10 +67,12 @@ class AFPO(NSGA2):
         ages = state.generation - founded
         count = n_survivors(config.population, self.options.survivors, newcomers=1)
         survivors = pareto.afpo_select(ages, values, count, born)
-        children = [
-            mutant(config, encoding, parents[survivors[k % count]], int(survivors[k % count]), rng)
-            for k in range(config.population - count - 1)
-        ]
+        chosen = [int(survivors[k % count]) for k in range(config.population - count - 1)]
+        if self.options.variation == "explore":
+            mutated = self.options.mutated_genes
+            children = explore_mutants(config, encoding, parents, chosen, mutated, rng)
+        else:
+            children = [mutant(config, encoding, parents[i], i, rng) for i in chosen]
         return [
             *(Individual(parents[i].genome, "survivor", (int(i),)) for i in survivors),
             *children,

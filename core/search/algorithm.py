@@ -138,10 +138,11 @@ class GAConfig(BaseModel):
 
     @model_serializer(mode="wrap")
     def _without_empty_options(self, handler: SerializerFunctionWrapHandler) -> dict[str, Any]:
-        """A config without options or objectives dumps as it did before strategies had any,
-        so the hashes of every existing config (output folders, stored runs) stay the same."""
+        """A config without options, objectives or a simulation budget (a run config's
+        `max_simulations`) dumps as it did before they existed, so the hashes of every
+        existing config (output folders, stored runs) stay the same."""
         dumped = handler(self)
-        for name in ("options", "objectives"):
+        for name in ("options", "objectives", "max_simulations"):
             if not dumped.get(name):
                 dumped.pop(name, None)
         return dumped

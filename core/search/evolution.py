@@ -57,7 +57,12 @@ class Evolution:
         algorithm = make_strategy(config.ga_config(), config.make_encoding())
         return cls(
             config=config,
-            stepper=Stepper(algorithm, config.sim, objective=config.objective),
+            stepper=Stepper(
+                algorithm,
+                config.sim,
+                objective=config.objective,
+                max_simulations=config.max_simulations,
+            ),
             state=algorithm.start(config.seed),
         )
 
@@ -91,7 +96,7 @@ class Evolution:
 
     @property
     def done(self) -> bool:
-        return self.algorithm.done(self.state)
+        return self.stepper.done(self.state, self.evaluations)
 
     def individuals(self) -> list[Individual]:
         """The current generation (what the next step evaluates)."""

@@ -97,6 +97,14 @@ class Stepper:
     batch_size: int = BATCH_SIZE
     in_flight: int = IN_FLIGHT
     objective: str = "speed"
+    max_simulations: int | None = None
+
+    def done(self, state: GAState, simulations: int) -> bool:
+        """Whether the run ends at `state`: its strategy is done, or the `simulations` of its
+        rows so far reach the run's `max_simulations` (rows are the same for any number of
+        workers, so is where the run ends)."""
+        budget = self.max_simulations
+        return self.algorithm.done(state) or (budget is not None and simulations >= budget)
 
     @property
     def encoding(self) -> Encoding:

@@ -16,7 +16,7 @@ JSON: each member's objective values and birth key.
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
@@ -25,7 +25,7 @@ from softevo.core.nulls import from_nulls, to_nulls
 from softevo.core.search import pareto
 from softevo.core.search.state import GAState, Individual
 from softevo.core.search.strategy import Strategy
-from softevo.core.search.variation import mate
+from softevo.core.search.variation import explore_children, mate
 
 
 class SurvivorOptions(BaseModel):
@@ -39,6 +39,20 @@ class SurvivorOptions(BaseModel):
         lt=1,
         description="fraction of each generation kept (by the algorithm's selection) into the "
         "next; the rest of the next are new",
+    )
+    variation: Literal["paper", "explore"] = Field(
+        "paper",
+        description="paper: the GA's operators (mutation_probability, mutation_genes), as runs "
+        "stored before issue 51; explore (what new runs get): every child mutated gene by gene, "
+        "mutated_genes genes on average, and a child repeating a genome already met re-drawn "
+        "(docs/evolution.md)",
+    )
+    mutated_genes: float = Field(
+        1.0,
+        gt=0,
+        le=1000,
+        description="explore: genes changed per child on average (a rate of mutated_genes / n "
+        "per gene of a genome of n)",
     )
 
 
@@ -114,10 +128,14 @@ class NSGA2(Strategy):
             rng, np.arange(len(survivors)), 2 * math.ceil(n_children / 2)
         )
         mates = survivors[drawn]
-        children: list[Individual] = []
-        for first, second in mates.reshape(-1, 2):
-            pair = (parents[first], parents[second])
-            children.extend(mate(config, encoding, pair, (int(first), int(second)), rng))
+        if self.options.variation == "explore":
+            mutated = self.options.mutated_genes
+            children = explore_children(config, encoding, parents, mates, n_children, mutated, rng)
+        else:
+            children = []
+            for first, second in mates.reshape(-1, 2):
+                pair = (parents[first], parents[second])
+                children.extend(mate(config, encoding, pair, (int(first), int(second)), rng))
         return [
             *(Individual(parents[i].genome, "survivor", (int(i),)) for i in survivors),
             *children[:n_children],

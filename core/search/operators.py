@@ -133,3 +133,16 @@ def iso_line(
     isotropic = rng.normal(0.0, 1.0, len(x)) * sigma_iso * (high - low)
     along = rng.normal(0.0, 1.0) * sigma_line * (y - x)
     return np.clip(x + isotropic + along, low, high)
+
+
+def mutate_real_each(
+    genes: np.ndarray, bounds: np.ndarray, rate: float, sigma: float, rng: np.random.Generator
+) -> np.ndarray:
+    """Per-gene Gaussian step: each real gene moves with probability `rate` by N(0, sigma x
+    (high - low)), clipped to bounds (two draws per gene: whether, and how far)."""
+    if len(genes) == 0:
+        return genes.copy()
+    low, high = bounds.T
+    hit = rng.random(len(genes)) < rate
+    step = rng.normal(0.0, 1.0, len(genes)) * sigma * (high - low)
+    return np.clip(np.where(hit, genes + step, genes), low, high)

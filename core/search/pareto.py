@@ -207,6 +207,28 @@ def hypervolume(values: np.ndarray, reference: np.ndarray) -> float:
     return float(_volume(front))
 
 
+#: How far past the nadir the normalised reference lies, as a fraction of each objective's
+#: range: a front's extreme points (which lie on the nadir in one objective) still count.
+NADIR_MARGIN = 0.1
+
+
+def normalised_hypervolume(values: np.ndarray, ideal: np.ndarray, nadir: np.ndarray) -> float:
+    """The hypervolume of the rows with each objective scaled to [0, 1] between `nadir` (0)
+    and `ideal` (1) (maximised, [M] each; values past the ideal clipped to it), against a
+    reference `NADIR_MARGIN` of the range past the nadir, divided by the box's volume: 1 is a
+    front that holds the ideal point, and every objective weighs the same whatever its units
+    (a raw volume against a far reference is nearly the best value of one objective)."""
+    array = _as_values(values)
+    top, bottom = np.asarray(ideal, dtype=float), np.asarray(nadir, dtype=float)
+    if top.shape != (array.shape[1],) or bottom.shape != top.shape:
+        raise ValueError(f"ideal and nadir must be {array.shape[1]} numbers each")
+    if not (np.isfinite(top).all() and np.isfinite(bottom).all() and (top > bottom).all()):
+        raise ValueError(f"ideal must be finite and above nadir, got {ideal!r} and {nadir!r}")
+    scaled = np.minimum((array - bottom) / (top - bottom), 1.0)
+    reference = np.full(array.shape[1], -NADIR_MARGIN)
+    return hypervolume(scaled, reference) / (1.0 + NADIR_MARGIN) ** array.shape[1]
+
+
 def _volume(points: np.ndarray) -> float:
     """The volume of the union of boxes [0, p] for positive [N, M] points."""
     if points.shape[1] == 1:

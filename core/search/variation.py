@@ -1,8 +1,20 @@
 """Variation shared by the built-in strategies: the paper's crossover-and-mutation of two
-parents, and a mutant of one. Both draw only from the generator they are given."""
+parents, and a mutant of one; and variation that explores (issue 51). All draw only from the
+generator they are given, so a run stays the same for any number of workers.
+
+Exploring variation is for NSGA-II and AFPO with options variation 'explore':
+every child mutated gene by gene, `mutated_genes` genes changed on average (1 of the genome's n
+by default: a rate of 1/n per gene; labels redrawn to another value, real genes stepped by a
+Gaussian of `mutation_sigma` x their range), and a child that repeats a genome already met (the
+parents' generation, or an earlier child of this one) re-drawn, up to `REDRAWS` times, instead of
+being counted as a birth that the cache answers for free. An encoding with operators of its own
+(`cppn`: NEAT) breeds with them, its repeats re-drawn the same way.
+"""
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
+from functools import partial
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -32,21 +44,7 @@ def mate(
     own = getattr(encoding, "mate", None)
     if own is not None:
         return own(config, pair, indices, rng)
-    first, second = pair
-    a, b = np.array(first.genome.discrete), np.array(second.genome.discrete)
-    ra, rb = np.array(first.genome.real), np.array(second.genome.real)
-    operator = "copy"
-    if rng.random() < config.crossover_probability:
-        operator = "crossover"
-        cut = (0, 0)
-        for segment in encoding.segments:
-            part = slice(segment.start, segment.stop)
-            a[part], b[part], cut = operators.two_point_crossover(a[part], b[part], rng)
-        if encoding.voxel_reals:  # a voxel's own genes go with its label: the same cut
-            robot = len(ra) - encoding.voxel_reals * encoding.n_discrete
-            ra, rb = _cut_with_labels(ra, rb, cut, robot, encoding.n_discrete, rng)
-        else:
-            ra, rb, _ = operators.two_point_crossover(ra, rb, rng)
+    operator, (a, ra), (b, rb) = _crossed(config, encoding, pair, rng)
     bred = []
     for k, (discrete, real) in enumerate(((a, ra), (b, rb))[:children]):
         label = operator
@@ -79,6 +77,32 @@ def mutant(
     return Individual(encoding.genome(discrete, real), "copy+mutation", (index,))
 
 
+def _crossed(
+    config: GAConfig,
+    encoding: Encoding,
+    pair: tuple[Individual, Individual],
+    rng: np.random.Generator,
+) -> tuple[str, tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
+    """The operator ("crossover" with probability `crossover_probability`, else "copy") and
+    the two children's (discrete, real) genes before mutation."""
+    first, second = pair
+    a, b = np.array(first.genome.discrete), np.array(second.genome.discrete)
+    ra, rb = np.array(first.genome.real), np.array(second.genome.real)
+    operator = "copy"
+    if rng.random() < config.crossover_probability:
+        operator = "crossover"
+        cut = (0, 0)
+        for segment in encoding.segments:
+            part = slice(segment.start, segment.stop)
+            a[part], b[part], cut = operators.two_point_crossover(a[part], b[part], rng)
+        if encoding.voxel_reals:  # a voxel's own genes go with its label: the same cut
+            robot = len(ra) - encoding.voxel_reals * encoding.n_discrete
+            ra, rb = _cut_with_labels(ra, rb, cut, robot, encoding.n_discrete, rng)
+        else:
+            ra, rb, _ = operators.two_point_crossover(ra, rb, rng)
+    return operator, (a, ra), (b, rb)
+
+
 def _cut_with_labels(
     ra: np.ndarray,
     rb: np.ndarray,
@@ -96,3 +120,126 @@ def _cut_with_labels(
         block = slice(start + i, start + j)
         ra[block], rb[block] = rb[block].copy(), ra[block].copy()
     return ra, rb
+
+
+#: Tries for a child that repeats a genome already met before it is kept as it is (a
+#: population of one genome's neighbours can run out of new ones).
+REDRAWS = 10
+
+
+def gene_rate(encoding: Encoding, mutated_genes: float) -> float:
+    """The per-gene chance that makes `mutated_genes` of the genome's genes change on average."""
+    genes = int((np.asarray(encoding.alphabet) > 1).sum()) + len(encoding.real_bounds)
+    return min(1.0, mutated_genes / max(1, genes))
+
+
+def _mutated(
+    config: GAConfig,
+    encoding: Encoding,
+    discrete: np.ndarray,
+    real: np.ndarray,
+    rate: float,
+    rng: np.random.Generator,
+) -> tuple[np.ndarray, np.ndarray]:
+    discrete = operators.mutate_each(discrete, encoding.alphabet, rate, rng)
+    real = operators.mutate_real_each(real, encoding.real_bounds, rate, config.mutation_sigma, rng)
+    return discrete, real
+
+
+def unseen(
+    breed: Callable[[], list[Individual]], seen: set[str], redraws: int = REDRAWS
+) -> list[Individual]:
+    """`breed()`'s children, each one whose genome is in `seen` replaced by the child at its
+    place of another `breed()`, up to `redraws` times; `seen` gains every child kept."""
+    children = breed()
+    for k in range(len(children)):
+        tries = 0
+        while children[k].genome.hash in seen and tries < redraws:
+            children[k] = breed()[k]
+            tries += 1
+        seen.add(children[k].genome.hash)
+    return children
+
+
+def explore_children(
+    config: GAConfig,
+    encoding: Encoding,
+    parents: Sequence[Individual],
+    mates: np.ndarray,
+    count: int,
+    mutated_genes: float,
+    rng: np.random.Generator,
+) -> list[Individual]:
+    """`count` children of the pairs `mates` ([K, 2] indices of `parents`): crossover as the
+    GA's (`crossover_probability`), then every child mutated gene by gene; repeats re-drawn."""
+    seen = {parent.genome.hash for parent in parents}
+    rate = gene_rate(encoding, mutated_genes)
+    children: list[Individual] = []
+    for first, second in mates.reshape(-1, 2):
+        pair, indices = (parents[first], parents[second]), (int(first), int(second))
+        children.extend(unseen(partial(_pair, config, encoding, pair, indices, rate, rng), seen))
+    return children[:count]
+
+
+def _pair(
+    config: GAConfig,
+    encoding: Encoding,
+    pair: tuple[Individual, Individual],
+    indices: tuple[int, int],
+    rate: float,
+    rng: np.random.Generator,
+) -> list[Individual]:
+    own = getattr(encoding, "mate", None)
+    if own is not None:
+        return own(config, pair, indices, rng)
+    operator, *genes = _crossed(config, encoding, pair, rng)
+    bred = []
+    for k, (discrete, real) in enumerate(genes):
+        discrete, real = _mutated(config, encoding, discrete, real, rate, rng)
+        parents = indices if operator == "crossover" else (indices[k],)
+        bred.append(Individual(encoding.genome(discrete, real), operator + "+mutation", parents))
+    return bred
+
+
+def explore_mutants(
+    config: GAConfig,
+    encoding: Encoding,
+    parents: Sequence[Individual],
+    chosen: Sequence[int],
+    mutated_genes: float,
+    rng: np.random.Generator,
+) -> list[Individual]:
+    """A mutant of each of `parents[i]` for i in `chosen` (gene by gene; repeats re-drawn)."""
+    seen = {parent.genome.hash for parent in parents}
+    rate = gene_rate(encoding, mutated_genes)
+    return [
+        unseen(partial(_one_mutant, config, encoding, parents[i], int(i), rate, rng), seen)[0]
+        for i in chosen
+    ]
+
+
+def _one_mutant(
+    config: GAConfig,
+    encoding: Encoding,
+    parent: Individual,
+    index: int,
+    rate: float,
+    rng: np.random.Generator,
+) -> list[Individual]:
+    return [_mutant(config, encoding, parent, index, rate, rng)]
+
+
+def _mutant(
+    config: GAConfig,
+    encoding: Encoding,
+    parent: Individual,
+    index: int,
+    rate: float,
+    rng: np.random.Generator,
+) -> Individual:
+    own = getattr(encoding, "mutate", None)
+    if own is not None:
+        return own(config, parent, index, rng)
+    discrete, real = np.array(parent.genome.discrete), np.array(parent.genome.real)
+    discrete, real = _mutated(config, encoding, discrete, real, rate, rng)
+    return Individual(encoding.genome(discrete, real), "copy+mutation", (index,))

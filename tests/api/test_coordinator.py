@@ -115,7 +115,7 @@ class FreezingEvaluator(SerialEvaluator):
 
 #: NSGA-II and AFPO with objectives: the taken-over run must also rebuild what they breed from
 #: (objective values, births, lineages) and the front so far from the database.
-PARETO = {"objectives": ["speed", "-cost_of_transport"]}
+PARETO = {"objectives": ["speed", "-cost_of_transport"], "options": {"variation": "explore"}}
 
 
 @pytest.mark.parametrize(

@@ -57,7 +57,12 @@ STEADY_REQUEST = {
 }
 #: The same run as AFPO on speed and cost of transport: the objective values, births and lineage
 #: starts it breeds from, and the front so far, ride in the state the generation commit writes.
-AFPO_REQUEST = {**REQUEST, "algorithm": "afpo", "objectives": ["speed", "-cost_of_transport"]}
+AFPO_REQUEST = {
+    **REQUEST,
+    "algorithm": "afpo",
+    "objectives": ["speed", "-cost_of_transport"],
+    "options": {"variation": "explore"},  # what a new AFPO run gets (issue 51)
+}
 GENERATIONS = REQUEST["generations"]
 POPULATION = REQUEST["population"]
 #: The server is killed in the first generation from KILL_AT on caught half evaluated; the last

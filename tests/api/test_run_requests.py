@@ -70,3 +70,24 @@ def test_the_curve_as_csv_ends_its_lines_as_the_cli_does(client: TestClient) -> 
     run = finished(client, client.post("/runs", json=body).json()["id"])
     text = client.get(f"/runs/{run['id']}/curve?format=csv").content
     assert text.count(b"\n") == 2 and b"\r" not in text  # header and one generation, LF
+
+
+def test_a_budget_in_simulations_ends_the_run_and_is_shown_back(client: TestClient) -> None:
+    """`max_simulations` (issue 51): the run stops at the first generation reaching it, well
+    before its generations, and `GET /runs/{id}` says both; a bad value is one line."""
+    body = {
+        **QUICK,
+        "shape": [2, 2, 2],
+        "population": 4,
+        "generations": 50,
+        "max_simulations": 10,
+        "sim": {"duration": 0.5, "settle_time": 0.1},
+    }
+    run = finished(client, client.post("/runs", json=body).json()["id"])
+    assert run["status"] == "completed", run
+    assert run["config"]["max_simulations"] == run["progress"]["max_simulations"] == 10
+    assert 10 <= run["progress"]["evaluations"] < 14 and run["progress"]["generation"] < 50
+    response = client.post("/runs", json={**QUICK, "max_simulations": 0})
+    assert response.status_code == 422, response.text
+    detail = response.json()["detail"]
+    assert detail[0]["loc"] == ["body", "max_simulations"] and len(detail) == 1, detail

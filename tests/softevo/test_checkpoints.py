@@ -28,8 +28,14 @@ CONFIG = {
     "sim": {"duration": 1.0},
 }
 #: NSGA-II and AFPO with objectives: their kept values, births, lineages and the front so far
-#: ride in the state, and must come back from the store as they were.
-PARETO = {"objectives": ["speed", "-cost_of_transport"]}
+#: ride in the state, and must come back from the store as they were; with their exploring
+#: variation (issue 51) and a budget in simulations that ends the run at its third row (6 + 3 +
+#: 3 = 12 of the 15 its four generations would simulate).
+PARETO = {
+    "objectives": ["speed", "-cost_of_transport"],
+    "options": {"variation": "explore"},
+    "max_simulations": 12,
+}
 
 
 def stop_after(generations: int) -> Callable[[Step], None]:
@@ -72,6 +78,8 @@ def test_an_interrupt_between_generations_resumes_to_the_uninterrupted_run(
     same(finish(tmp_path, config.generations), whole)
     if changes:
         assert whole.curve[-1]["front_size"] >= 1 and whole.state["data"]["front"]
+        counts = [row["evaluations"] for row in whole.curve]
+        assert sum(counts[:-1]) < 12 <= sum(counts) and len(counts) < 4  # the budget ended it
 
 
 def test_an_interrupt_halfway_through_a_generation_keeps_what_landed(

@@ -217,12 +217,14 @@ def test_nsga2_and_afpo_on_two_rq_workers_give_the_serial_curve_and_front(
             request = {
                 "preset": "quick",
                 "population": 6,
-                "generations": 3,
+                "generations": 4,
                 "seed": 5,
                 "shape": [2, 2, 2],
                 "algorithm": algorithm,
                 "sim": {"duration": 1.0},
                 "objectives": ["speed", "-cost_of_transport"],
+                "max_simulations": 12,
+                "options": {"variation": "explore"},
             }
             serial = Evolution.start(resolve(request))
             serial.run(SerialEvaluator())
@@ -230,5 +232,7 @@ def test_nsga2_and_afpo_on_two_rq_workers_give_the_serial_curve_and_front(
             on_rq.run(evaluator)
             assert on_rq.curve() == serial.curve() and serial.curve()[-1]["hypervolume"] > 0
             assert on_rq.state.data == serial.state.data and serial.state.data["front"]
+            counts = [row["evaluations"] for row in serial.curve()]
+            assert sum(counts[:-1]) < 12 <= sum(counts) and len(counts) < 4  # the budget's end
     finally:
         evaluator.close()

@@ -62,6 +62,7 @@ def run_public(db: Database, run: store.RunRecord, problem: str | None = None) -
         progress=RunProgress(
             generation=run.generations_done,
             generations=run.generations_total,
+            max_simulations=(run.config or {}).get("max_simulations"),
             evaluations=run.evaluations,
             saved=run.saved,
             fitness_saved=sum(n for s, n in counts.items() if s != IndividualStatus.PENDING),
