@@ -24,6 +24,7 @@ from softevo import (
     docs_command,
     plot_command,
     reproduce,
+    run_arguments,
     run_command,
     service_commands,
 )
@@ -286,9 +287,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     simulate.add_argument(
         "--terrain",
-        type=run_command.terrain_json,
+        type=run_arguments.terrain_json,
         metavar="JSON",
-        help=f"simulate on this ground instead: {run_command.TERRAIN_EXAMPLES}",
+        help=f"simulate on this ground instead: {run_arguments.TERRAIN_EXAMPLES}",
     )
     simulate.add_argument(
         "--trajectory", metavar="OUT.json", help="also write mass positions over time to this file"

@@ -9,7 +9,7 @@ import re
 import pytest
 
 from softevo.core.config import resolve
-from softevo.run_command import TERRAIN_EXAMPLES
+from softevo.run_arguments import TERRAIN_EXAMPLES
 from tests.softevo.inprocess import softevo
 
 
