@@ -214,9 +214,15 @@ class RQEvaluator(Evaluator):
         # on a pipeline of ours, RQ sends the job and its queue's name in one round trip, not two
         with self.connection.pipeline() as pipe:
             self.queue.enqueue(
-                self.job_function, args=(key, files, *extra), job_id=job_id, job_timeout=timeout,
-                meta={"engine": self.engine}, result_ttl=600, failure_ttl=3600, pipeline=pipe,
-            )  # fmt: skip
+                self.job_function,
+                args=(key, files, *extra),
+                job_id=job_id,
+                job_timeout=timeout,
+                meta={"engine": self.engine},
+                result_ttl=600,
+                failure_ttl=3600,
+                pipeline=pipe,
+            )
             pipe.execute()
         return job_id
 

@@ -48,8 +48,13 @@ WEIGHT = 3.0
 ROBOT_BOUNDS = np.array([GENE_BOUNDS["a"], GENE_BOUNDS["c"]])
 #: Chances of the NEAT mutations (one per mutation): weights, a node, a connection, an
 #: activation, the robot's a and c.
-MUTATIONS = (("weights", 0.5), ("node", 0.15), ("connection", 0.15), ("activation", 0.1),
-             ("actuation", 0.1))  # fmt: skip
+MUTATIONS = (
+    ("weights", 0.5),
+    ("node", 0.15),
+    ("connection", 0.15),
+    ("activation", 0.1),
+    ("actuation", 0.1),
+)
 #: Step of a perturbed weight, and the chance each weight is perturbed.
 WEIGHT_SIGMA, WEIGHT_RATE = 0.5, 0.5
 
@@ -110,10 +115,15 @@ class Network:
         nodes = tuple((d[1 + 2 * i], d[2 + 2 * i]) for i in range(n_nodes))
         base = 1 + 2 * n_nodes
         links = tuple(
-            Connection(d[base + 4 * i], d[base + 4 * i + 1], d[base + 4 * i + 2],
-                       bool(d[base + 4 * i + 3]), r[2 + i])
+            Connection(
+                d[base + 4 * i],
+                d[base + 4 * i + 1],
+                d[base + 4 * i + 2],
+                bool(d[base + 4 * i + 3]),
+                r[2 + i],
+            )
             for i in range(int(n_links))
-        )  # fmt: skip
+        )
         network = cls(nodes, links, r[0], r[1])
         network.validate()
         return network
@@ -165,8 +175,9 @@ class Network:
         links = [link for link in self.connections if link.enabled]
         zero = np.zeros(inputs.shape[1])
         for node in self.order():
-            total = sum((link.weight * values[link.source] for link in links
-                         if link.target == node), zero)  # fmt: skip
+            total = sum(
+                (link.weight * values[link.source] for link in links if link.target == node), zero
+            )
             values[node] = activate(ACTIVATIONS[activation[node]], total)
         return np.array([values[o] - _MIDDLE[ACTIVATIONS[activation[o]]] for o in OUTPUT_IDS])
 

@@ -18,9 +18,18 @@ from softevo.core.nulls import from_null, to_null
 
 #: The learning-curve columns of the public contract, in order.
 CURVE_COLUMNS = (
-    "generation", "best", "mean", "median", "min", "best_so_far", "diversity", "evaluations",
-    "saved", "failed", "std",
-)  # fmt: skip
+    "generation",
+    "best",
+    "mean",
+    "median",
+    "min",
+    "best_so_far",
+    "diversity",
+    "evaluations",
+    "saved",
+    "failed",
+    "std",
+)
 
 
 #: The columns a run with an archive adds (quality-diversity, `softevo.core.search.archive`).
