@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 from softevo.core.physics.simulate import simulate
-from softevo.core.robots.cppn import CppnEncoding
+from softevo.core.robots.cppn_encoding import CppnEncoding
 from softevo.core.robots.robot import build_mechanics
 from softevo.core.robots.settings import SimSettings
 

@@ -54,12 +54,12 @@ from service import Processes, start_redis, start_workers
 
 from softevo.core.config import RunConfig, resolve
 from softevo.core.evaluator import BatchResult, Evaluator, split_evenly
+from softevo.core.evolution import Evolution
 from softevo.core.limits import BATCH_SIZE
 from softevo.core.physics import simulate, simulate_batch
 from softevo.core.physics.evaluation import PoolEvaluator, evaluate_robot_files
 from softevo.core.robots.genome import Genome
 from softevo.core.robots.robot_file import parse_robot, robot_to_json
-from softevo.core.search.evolution import Evolution
 from softevo.local_service import service_env, start_service
 
 BOXES = (

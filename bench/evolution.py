@@ -19,9 +19,9 @@ import numpy as np
 
 from softevo.core.config import resolve
 from softevo.core.evaluator import evaluate_in_batches
+from softevo.core.evolution import Evolution
 from softevo.core.physics.evaluation import PoolEvaluator, SerialEvaluator
 from softevo.core.robots.robot_file import robot_to_json
-from softevo.core.search.evolution import Evolution
 
 
 def evaluations_per_second(files: list[dict], evaluator, repeats: int) -> tuple[float, np.ndarray]:

@@ -28,9 +28,9 @@ METHODS = ("spawn", "forkserver")
 def once(method: str, pools: int) -> list[float]:
     """Seconds to start each of `pools` pools, one after the other, in this process."""
     from softevo.core.config import resolve
+    from softevo.core.evolution import Evolution
     from softevo.core.physics import evaluation
     from softevo.core.robots.robot_file import robot_to_json
-    from softevo.core.search.evolution import Evolution
 
     if method == "spawn":  # the way before the fork server
         evaluation.pool_context = lambda: multiprocessing.get_context("spawn")  # type: ignore[assignment]

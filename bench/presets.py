@@ -9,8 +9,8 @@ diversity of the last generation.
 from __future__ import annotations
 
 from softevo.core.config import resolve
+from softevo.core.evolution import Evolution
 from softevo.core.physics.evaluation import PoolEvaluator
-from softevo.core.search.evolution import Evolution
 
 
 def main() -> None:

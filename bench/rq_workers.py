@@ -54,11 +54,11 @@ from benchlib import OtherLoad, cpu_model, free_port, redis_version
 from rq import Worker
 
 from softevo.core.config import resolve
+from softevo.core.evolution import Evolution
 from softevo.core.physics.evaluation import PoolEvaluator, SerialEvaluator, evaluate_robot_files
 from softevo.core.robots.robot import VoxelRobot
 from softevo.core.robots.robot_file import robot_to_json
 from softevo.core.robots.settings import sim_settings
-from softevo.core.search.evolution import Evolution
 from softevo.worker.evaluator import RQEvaluator
 from softevo.worker.jobs import evaluate_batch
 from softevo.worker.queue import connect

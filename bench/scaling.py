@@ -83,9 +83,9 @@ WIDTHS = (1, 2, 3, 4)
 def measure_model(repeats: int = 3, robots: int = 8) -> tuple[dict[int, float], float]:
     """Seconds per occupied voxel in a kernel call of n robots (first-generation paper-voxel
     robots of seed 1, the best of `repeats`), and the sample's mean occupied voxels."""
+    from softevo.core.evolution import Evolution
     from softevo.core.physics.evaluation import evaluate_robot_files, warm_up
     from softevo.core.robots.robot_file import robot_to_json
-    from softevo.core.search.evolution import Evolution
 
     warm_up()
     run = Evolution.start(resolve({"preset": "paper-voxel", "seed": 1}))

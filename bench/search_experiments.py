@@ -28,7 +28,7 @@ import numpy as np
 from softevo import library
 from softevo.core.config import resolve
 from softevo.core.search import pareto
-from softevo.core.search.evolution import Evolution
+from softevo.core.evolution import Evolution
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "docs" / "experiments" / "search"

@@ -8,7 +8,7 @@ default) on each of these paths and prints evaluations per second for each:
   forking `Worker` (the default) and once with `SimpleWorker` (`--worker-class fork,simple`, the
   default; each class has its own redis-server);
 * `service, local pool`: `softevo serve` without Redis, SOFTEVO_WORKERS=2 (its in-process pool);
-* `Evolution + PoolEvaluator(2)`: plain `core.search.evolution.Evolution` in this process.
+* `Evolution + PoolEvaluator(2)`: plain `core.evolution.Evolution` in this process.
 
 Every path is started once and kept warm; the timed runs then go round the paths `--repeats`
 times (3), and each path's median run stands for it, so a slow spell of a shared machine does not
@@ -61,11 +61,11 @@ from rq import Worker
 from softevo.api.settings import Settings
 from softevo.core.config import resolve
 from softevo.core.evaluator import evaluate_in_batches, split_evenly
+from softevo.core.evolution import Evolution
 from softevo.core.physics.evaluation import PoolEvaluator
 from softevo.core.robots.robot import VoxelRobot
 from softevo.core.robots.robot_file import robot_to_json
 from softevo.core.robots.settings import sim_settings
-from softevo.core.search.evolution import Evolution
 from softevo.core.search.stats import CURVE_COLUMNS
 from softevo.local_service import start_service
 from softevo.worker.queue import connect

@@ -9,13 +9,14 @@ any bad value, before anything runs.
 from __future__ import annotations
 
 import math
-from typing import Any, Literal
+from typing import Any
 
 from pydantic import Field, ValidationError, field_validator, model_validator
 
 from softevo.core.limits import MAX_SIDE, MAX_VOXELS
 from softevo.core.objectives import Objective
-from softevo.core.robots.encodings import PAPER_CUBE_OPTIONS, Encoding, make_encoding
+from softevo.core.robots.encoding_registry import encoding_class, make_encoding
+from softevo.core.robots.encodings import PAPER_CUBE_OPTIONS, Encoding, EncodingError
 from softevo.core.robots.settings import SimSettings, format_validation_error
 from softevo.core.robots.tasks import TASKS, task_presets
 from softevo.core.search.algorithm import GAConfig
@@ -61,7 +62,12 @@ class RunConfig(GAConfig):
     """Everything that defines a run: encoding, bounding box, seed, GA and simulation settings."""
 
     preset: str | None = None
-    encoding: Literal["voxel", "voxel-phase", "cube-springs", "spring", "cppn"] = "voxel"
+    encoding: str = Field(
+        "voxel",
+        max_length=100,
+        description="how genes become a robot, by name: one installed in the entry-point group "
+        "`softevo.encodings` (built in: voxel, voxel-phase, cube-springs, spring, cppn)",
+    )
     shape: tuple[int, int, int] = (4, 4, 4)
     seed: int = Field(0, ge=0, le=2**63 - 1)
     sim: SimSettings = Field(default_factory=SimSettings)
@@ -90,6 +96,15 @@ class RunConfig(GAConfig):
             return tuple(tuple(row) if isinstance(row, list) else row for row in value)
         return value
 
+    @field_validator("encoding")
+    @classmethod
+    def _encoding(cls, value: str) -> str:
+        try:
+            encoding_class(value)
+        except EncodingError as error:
+            raise ValueError(str(error)) from None
+        return value
+
     @model_validator(mode="after")
     def _consistent(self) -> RunConfig:
         if self.encoding == "cube-springs" and self.shape != (1, 1, 1):
@@ -99,7 +114,7 @@ class RunConfig(GAConfig):
             )
         if self.encoding == "cube-springs" and len(self.cube_options) < 2:
             raise ValueError("cube_options: at least two options are needed to evolve")
-        if self.descriptors and self.encoding not in ("voxel", "voxel-phase", "cppn"):
+        if self.descriptors and not encoding_class(self.encoding).describable:
             raise ValueError(
                 f"descriptors: defined on voxel labels, so only for the voxel encodings and "
                 f"cppn, not {self.encoding}"

@@ -11,9 +11,10 @@ import numpy as np
 
 from softevo.core.outputs import figures
 from softevo.core.outputs.picture import thumbnail_png
-from softevo.core.robots.cppn import CppnEncoding, Network
+from softevo.core.robots.cppn import Network
+from softevo.core.robots.cppn_encoding import CppnEncoding
+from softevo.core.robots.cppn_variation import mutate_network
 from softevo.core.robots.settings import SimSettings
-from softevo.core.search.cppn_variation import mutate_network
 
 SHAPE = (8, 8, 8)
 

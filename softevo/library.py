@@ -20,6 +20,7 @@ from typing import Any
 
 from softevo.core.config import ConfigError, RunConfig, resolve
 from softevo.core.evaluator import Evaluator
+from softevo.core.evolution import Evolution, Progress
 from softevo.core.nulls import to_null, to_null_record
 from softevo.core.robots.robot import Robot, build_mechanics, dropped_voxels
 from softevo.core.robots.robot_file import (
@@ -29,7 +30,6 @@ from softevo.core.robots.robot_file import (
     robot_to_json,
     with_sim,
 )
-from softevo.core.search.evolution import Evolution, Progress
 from softevo.core.search.front import front_rows
 
 __all__ = [

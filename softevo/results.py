@@ -37,12 +37,12 @@ from pathlib import Path
 from typing import Any
 
 from softevo.core.config import ConfigError, resolve
+from softevo.core.evolution import Evolution
 from softevo.core.nulls import from_null, from_null_record, to_null
 from softevo.core.outputs import figures
 from softevo.core.outputs.archive_figures import archive_figure
 from softevo.core.outputs.front_figure import front_figure, hypervolume_figure, objectives_text
 from softevo.core.search.algorithm import GAState
-from softevo.core.search.evolution import Evolution
 from softevo.core.search.front import front_rows
 from softevo.core.search.stats import curve_columns
 from softevo.library import Result

@@ -27,8 +27,8 @@ from softevo.api.faults import Faults, reason
 from softevo.api.store import folders
 from softevo.api.store.driving import Lease
 from softevo.core.config import ConfigError, RunConfig, resolve
+from softevo.core.evolution import Evolution
 from softevo.core.limits import BATCH_SIZE, IN_FLIGHT, SAVE_SECONDS
-from softevo.core.search.evolution import Evolution
 from softevo.core.search.generation import Step
 from softevo.core.search.state import GAState
 from softevo.core.search.stats import GenerationStats

@@ -12,8 +12,8 @@ from typing import Any
 import numpy as np
 
 from softevo.core.config import resolve
+from softevo.core.evolution import Evolution
 from softevo.core.physics.evaluation import SerialEvaluator
-from softevo.core.search.evolution import Evolution
 from softevo.core.search.front import Row, front_rows, front_values
 
 

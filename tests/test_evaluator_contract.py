@@ -25,9 +25,9 @@ import pytest
 
 from softevo.core.config import resolve
 from softevo.core.evaluator import BatchDroppedError, Evaluator
+from softevo.core.evolution import Evolution
 from softevo.core.physics.evaluation import PoolEvaluator, SerialEvaluator
 from softevo.core.robots.robot_file import robot_to_json
-from softevo.core.search.evolution import Evolution
 from softevo.worker.evaluator import RQEvaluator
 from tests.services import RedisServer, Workers
 

@@ -10,7 +10,13 @@
   label (soft, hard, sine, neg_sine) for every spring of the bounding-box lattice, and a, b, c.
   Modules are single springs, not whole cubes.
 * `cppn` (the field's indirect encoding): a network queried at every voxel, decoded into a
-  `voxel-phase` robot; its genes and NEAT variation live in `softevo.core.robots.cppn`.
+  `voxel-phase` robot (`softevo.core.robots.cppn_encoding`, with its own NEAT variation).
+
+Each is found by name in the entry-point group `softevo.encodings`
+(`softevo.core.robots.encoding_registry`), so a user's encoding is one module of its own: an
+`Encoding` subclass (genome, random, decode to a robot) that may bring its own `Variation`
+(mate, mutate) and its own reading of diversity; search reads encodings through this interface
+alone.
 
 Every encoding exposes its genes to the operators as *segments*: runs of discrete genes with an
 alphabet size each (crossover cuts each segment separately, so the occupancy of the `spring`
@@ -23,10 +29,11 @@ import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from functools import cached_property
+from typing import ClassVar, Protocol
 
 import numpy as np
 
-from softevo.core.robots.genome import Genome
+from softevo.core.robots.genome import Genome, gene_diversity
 from softevo.core.robots.lattice import full_lattice
 from softevo.core.robots.robot import (
     GENE_BOUNDS,
@@ -48,6 +55,8 @@ PAPER_CUBE_OPTIONS = (
     (5000.0, 0.05, 1.0, 0.0),
     (5000.0, -0.05, 1.0, 0.0),
 )
+#: Spring options [k, b, w, c] of the `cube-springs` encoding.
+CubeOptions = tuple[tuple[float, float, float, float], ...]
 ACTUATION_BOUNDS = np.array([GENE_BOUNDS["a"], GENE_BOUNDS["b"], GENE_BOUNDS["c"]])
 
 
@@ -64,15 +73,59 @@ class Segment:
     alphabet: int
 
 
+class Rates(Protocol):
+    """The variation settings of a run that an encoding's own operators read (the search
+    settings, `softevo.core.search.settings.SearchSettings`, have them)."""
+
+    @property
+    def crossover_probability(self) -> float: ...
+    @property
+    def mutation_probability(self) -> float: ...
+    @property
+    def mutation_genes(self) -> int: ...
+    @property
+    def mutation_sigma(self) -> float: ...
+
+
+class Variation(ABC):
+    """Operators an encoding brings of its own (`cppn`: NEAT), which the strategies use in
+    place of their segment-wise crossover and mutation; every draw from `rng`."""
+
+    @abstractmethod
+    def mate(
+        self, rates: Rates, first: Genome, second: Genome, rng: np.random.Generator
+    ) -> tuple[bool, list[tuple[Genome, str]]]:
+        """Whether the pair was crossed, and two children with their operator labels."""
+
+    @abstractmethod
+    def mutate(self, rates: Rates, genome: Genome, rng: np.random.Generator) -> Genome:
+        """A mutated copy of `genome`."""
+
+
 class Encoding(ABC):
     """Genes <-> robots. Subclasses define the segments, real-gene bounds and the mapping."""
 
     name: str
     segments: tuple[Segment, ...]
     real_bounds: np.ndarray  # [R, 2] low, high
+    shape: tuple[int, int, int]
     #: Real genes that belong to the robot as a whole come first; then `voxel_reals` blocks of
     #: one real gene per voxel, which crossover cuts where it cuts the labels (co-design).
     voxel_reals: int = 0
+    #: Operators of its own (None: the strategies' segment-wise crossover and mutation).
+    variation: ClassVar[Variation | None] = None
+    #: Whether `labels` gives one label per voxel of `shape` (what the descriptors read).
+    describable: ClassVar[bool] = False
+
+    @classmethod
+    def build(cls, shape: tuple[int, int, int], cube_options: CubeOptions) -> Encoding:
+        """This encoding for a run's bounding box (and cube options, which only one reads)."""
+        return cls(shape)  # type: ignore[call-arg]  # every subclass but one takes the shape
+
+    def diversity(self, genomes: list[Genome]) -> float:
+        """A generation's diversity (the curve's column): by default how much the discrete
+        genes differ (`gene_diversity`)."""
+        return gene_diversity(genomes)
 
     @property
     def n_discrete(self) -> int:
@@ -154,6 +207,7 @@ def _index(values: tuple, allowed: tuple, what: str) -> list[int]:
 
 class VoxelEncoding(Encoding):
     name = "voxel"
+    describable = True
 
     def __init__(self, shape: tuple[int, int, int]) -> None:
         self.shape = shape
@@ -182,6 +236,10 @@ class CubeSpringsEncoding(Encoding):
         self.segments = (Segment(0, 28, len(self.options)),)
         self.real_bounds = np.empty((0, 2))
 
+    @classmethod
+    def build(cls, shape: tuple[int, int, int], cube_options: CubeOptions) -> Encoding:
+        return cls(cube_options)
+
     def to_robot(self, genome: Genome, sim: SimSettings) -> SpringRobot:
         self.check(genome)
         springs = np.array([self.options[g] for g in genome.discrete])
@@ -204,6 +262,7 @@ class VoxelPhaseEncoding(Encoding):
     actuated voxels use theirs; crossover cuts a voxel's amplitude and phase with its label."""
 
     name = "voxel-phase"
+    describable = True
     voxel_reals = 2
 
     def __init__(self, shape: tuple[int, int, int]) -> None:
@@ -273,26 +332,3 @@ class SpringEncoding(Encoding):
         labels = _index(robot.spring_labels, SPRING_LABELS, "spring label")
         discrete = np.array([*(int(f) for f in robot.filled), *labels])
         return self.genome(discrete, _actuation_genes(robot))
-
-
-def make_encoding(
-    name: str,
-    shape: tuple[int, int, int],
-    cube_options: tuple[tuple[float, float, float, float], ...] = PAPER_CUBE_OPTIONS,
-) -> Encoding:
-    """The encoding called `name` for a bounding box of `shape`."""
-    if name == "voxel":
-        return VoxelEncoding(shape)
-    if name == "voxel-phase":
-        return VoxelPhaseEncoding(shape)
-    if name == "spring":
-        return SpringEncoding(shape)
-    if name == "cube-springs":
-        return CubeSpringsEncoding(cube_options)
-    if name == "cppn":
-        from softevo.core.robots.cppn import CppnEncoding  # it builds on this module
-
-        return CppnEncoding(shape)
-    raise EncodingError(
-        f"unknown encoding {name!r} (voxel, voxel-phase, cube-springs, spring, cppn)"
-    )

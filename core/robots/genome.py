@@ -14,6 +14,8 @@ from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
+import numpy as np
+
 
 @dataclass(frozen=True)
 class Genome:
@@ -60,3 +62,22 @@ def with_genome(fields: dict[str, Any], genome: Genome) -> str:
     canonical text (encoded once, for its hash) rather than encoded again."""
     head = json.dumps(fields)[:-1]
     return f'{head}{", " if fields else ""}"genome": {genome.canonical}}}'
+
+
+def gene_diversity(genomes: list[Genome]) -> float:
+    """Mean pairwise normalised Hamming distance of the discrete genes (0 for fewer than 2):
+    for every pair, the fraction of positions where they differ. 0 means clones, about
+    1 - 1/alphabet uniformly random genomes; real genes do not enter it."""
+    if len(genomes) < 2 or not genomes[0].discrete:
+        return 0.0
+    genes = np.array([g.discrete for g in genomes], dtype=np.int64)
+    n, length = genes.shape
+    # pairs that differ at a position, from how often each value occurs there: n^2 - sum(c^2)
+    # ordered pairs differ, twice the unordered ones; all positions counted in one bincount
+    values = genes - genes.min()
+    alphabet = int(values.max()) + 1
+    counts = np.bincount(
+        (values + alphabet * np.arange(length)).ravel(), minlength=alphabet * length
+    )
+    differing = (length * n * n - int((counts * counts).sum())) // 2
+    return differing / (length * n * (n - 1) / 2)

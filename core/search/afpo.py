@@ -26,7 +26,7 @@ from softevo.core.search.state import GAState, Individual
 from softevo.core.search.variation import explore_mutants, mutant
 
 if TYPE_CHECKING:
-    from softevo.core.search.algorithm import GAConfig
+    from softevo.core.search.settings import SearchSettings
 
 
 class AFPO(NSGA2):
@@ -39,7 +39,7 @@ class AFPO(NSGA2):
     Options = SurvivorOptions
 
     @classmethod
-    def check(cls, config: GAConfig) -> None:
+    def check(cls, config: SearchSettings) -> None:
         if config.population < 3:
             raise ValueError(
                 f"population: afpo needs at least 3 (survivors, a child and a newcomer), "

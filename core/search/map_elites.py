@@ -30,7 +30,7 @@ from softevo.core.search.variation import mate
 
 if TYPE_CHECKING:
     from softevo.core.robots.encodings import Encoding
-    from softevo.core.search.algorithm import GAConfig
+    from softevo.core.search.settings import SearchSettings
 
 #: The options that only mutation-only variation reads.
 _MUTATION_ONLY = ("label_rate", "real", "sigma", "line_sigma")
@@ -109,7 +109,7 @@ class MapElites(Strategy):
     )
 
     @classmethod
-    def check(cls, config: GAConfig) -> None:
+    def check(cls, config: SearchSettings) -> None:
         if not config.descriptors:
             raise ValueError("descriptors: map-elites needs at least one descriptor")
         room_for_children(config)
@@ -167,10 +167,8 @@ class MapElites(Strategy):
         config, encoding, options = self.config, self.encoding, self.options
         first, second = (int(i) for i in rng.integers(0, len(elites), size=2))
         parent = elites[first].genome
-        own = getattr(encoding, "mutate", None)
-        if own is not None:  # e.g. NEAT mutations of a CPPN
-            child = own(config, Individual(parent, "elite"), first, rng)
-            return Individual(child.genome, f"elite-{child.operator}")
+        if encoding.variation is not None:  # e.g. NEAT mutations of a CPPN
+            return Individual(encoding.variation.mutate(config, parent, rng), "elite-copy+mutation")
         discrete = np.array(parent.discrete)
         if options.label_rate is None:
             genes = max(1, config.mutation_genes)

@@ -34,7 +34,7 @@ from softevo.core.search.strategy import Strategy
 from softevo.core.search.variation import mate
 
 if TYPE_CHECKING:
-    from softevo.core.search.algorithm import GAConfig
+    from softevo.core.search.settings import SearchSettings
 
 
 #: The key of `GAState.data` under which a weighted GA keeps the last generation's sums.
@@ -83,13 +83,13 @@ class PaperGA(Strategy):
     )
     Options = GAOptions
 
-    def __init__(self, config: GAConfig, encoding: Encoding) -> None:
+    def __init__(self, config: SearchSettings, encoding: Encoding) -> None:
         super().__init__(config, encoding)
         self.weights = None if self.options.weights is None else np.array(self.options.weights)
         self.reads_objectives = self.weights is not None  # `kept` then gets the sums' inputs
 
     @classmethod
-    def check(cls, config: GAConfig) -> None:
+    def check(cls, config: SearchSettings) -> None:
         room_for_children(config)
         weights = config.options.get("weights")
         if isinstance(weights, list) and len(weights) != len(config.objectives):
@@ -99,7 +99,7 @@ class PaperGA(Strategy):
             )
 
     @classmethod
-    def breeds_on(cls, config: GAConfig, setting: str) -> bool:
+    def breeds_on(cls, config: SearchSettings, setting: str) -> bool:
         """A weighted GA selects on the objectives."""
         weighted = setting == "objectives" and config.options.get("weights") is not None
         return weighted or super().breeds_on(config, setting)
@@ -149,7 +149,7 @@ class PaperGA(Strategy):
         ]
 
 
-def room_for_children(config: GAConfig) -> None:
+def room_for_children(config: SearchSettings) -> None:
     """Immigrants must leave room for survivors and children."""
     if config.n_immigrants >= config.population:
         raise ValueError(

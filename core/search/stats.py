@@ -1,8 +1,8 @@
 """Per-generation statistics: the learning curve's rows.
 
-Diversity is the mean pairwise normalised Hamming distance of the discrete genes: for every pair
-of individuals, the fraction of gene positions where they differ, averaged over all pairs. 0 means
-a population of clones, about 1 - 1/alphabet a uniformly random one. Real genes do not enter it.
+Diversity is the encoding's reading of how much a generation differs (`Encoding.diversity`: by
+default `softevo.core.robots.genome.gene_diversity`, the mean pairwise normalised Hamming
+distance of the discrete genes; `cppn`, the connections its networks share).
 Failed evaluations (NaN) are left out of best/mean/median/min/std and counted in `failed`.
 """
 
@@ -15,7 +15,6 @@ from typing import Any
 import numpy as np
 
 from softevo.core.nulls import from_null, to_null
-from softevo.core.robots.genome import Genome
 
 #: The learning-curve columns of the public contract, in order.
 CURVE_COLUMNS = (
@@ -91,31 +90,10 @@ class GenerationStats:
 _FIELDS = tuple(field.name for field in fields(GenerationStats))
 
 
-def diversity(genomes: list[Genome]) -> float:
-    """Mean pairwise normalised Hamming distance of the discrete genes (0 for fewer than 2)."""
-    if len(genomes) < 2 or not genomes[0].discrete:
-        return 0.0
-    if genomes[0].encoding == "cppn":  # networks of different sizes: their connections differ
-        from softevo.core.robots.cppn import network_diversity
-
-        return network_diversity(genomes)
-    genes = np.array([g.discrete for g in genomes], dtype=np.int64)
-    n, length = genes.shape
-    # pairs that differ at a position, from how often each value occurs there: n^2 - sum(c^2)
-    # ordered pairs differ, twice the unordered ones; all positions counted in one bincount
-    values = genes - genes.min()
-    alphabet = int(values.max()) + 1
-    counts = np.bincount(
-        (values + alphabet * np.arange(length)).ravel(), minlength=alphabet * length
-    )
-    differing = (length * n * n - int((counts * counts).sum())) // 2
-    return differing / (length * n * (n - 1) / 2)
-
-
 def generation_stats(
     generation: int,
     fitness: np.ndarray,
-    genomes: list[Genome],
+    diversity: float,
     best_so_far: float,
     evaluations: int = 0,
     saved: int = 0,
@@ -130,7 +108,7 @@ def generation_stats(
         min=float(finite.min()) if has else math.nan,
         std=float(finite.std()) if has else math.nan,
         best_so_far=best_so_far,
-        diversity=diversity(genomes),
+        diversity=diversity,
         size=len(fitness),
         failed=int(len(fitness) - len(finite)),
         evaluations=evaluations,

@@ -37,7 +37,7 @@ from softevo.core.search.strategy import Strategy
 from softevo.core.search.variation import mate
 
 if TYPE_CHECKING:
-    from softevo.core.search.algorithm import GAConfig
+    from softevo.core.search.settings import SearchSettings
 
 #: The key of `GAState.data` holding the births in flight and the population's birth numbers.
 KEY = "steady"
@@ -119,7 +119,7 @@ class SteadyState(Strategy):
     streaming: ClassVar[bool] = True
 
     @classmethod
-    def check(cls, config: GAConfig) -> None:
+    def check(cls, config: SearchSettings) -> None:
         window = config.options.get("window")
         if isinstance(window, int) and window > MAX_WINDOW * config.population:
             raise ValueError(
@@ -130,13 +130,13 @@ class SteadyState(Strategy):
             raise ValueError('options.parents: "archive" needs descriptors and bins')
 
     @classmethod
-    def breeds_on(cls, config: GAConfig, setting: str) -> bool:
+    def breeds_on(cls, config: SearchSettings, setting: str) -> bool:
         """With `parents: "archive"` the parents are the archive's elites."""
         archive = setting in ("descriptors", "bins") and config.options.get("parents") == "archive"
         return archive or super().breeds_on(config, setting)
 
     @classmethod
-    def state_genomes(cls, config: GAConfig) -> int:
+    def state_genomes(cls, config: SearchSettings) -> int:
         """The population and the W births in flight."""
         return config.population + window_size(config.options, config.population)
 

@@ -11,7 +11,7 @@ with any number of births.
 
 Algorithms are found by name in the entry-point group `softevo.strategies`
 (`softevo.core.search.registry`); each declares its own settings as a pydantic model (`Options`),
-which `POST /runs` and `softevo run` validate under `"options"`. The shared `GAConfig` settings
+which `POST /runs` and `softevo run` validate under `"options"`. The shared `SearchSettings`
 it reads are listed in `uses`, so `GET /algorithms` shows what each one honours.
 """
 
@@ -35,7 +35,7 @@ from softevo.core.search.stats import GenerationStats, generation_stats
 from softevo.core.search.vectors import objective_values, reference_point
 
 if TYPE_CHECKING:
-    from softevo.core.search.algorithm import GAConfig
+    from softevo.core.search.settings import SearchSettings
 
 #: Each individual's record of measures (name -> value; NaN or missing: not measured).
 Records = Sequence[Mapping[str, float]]
@@ -55,7 +55,7 @@ class Strategy(ABC):
 
     name: ClassVar[str]
     summary: ClassVar[str]
-    #: The shared `GAConfig` settings this strategy reads (shown by `GET /algorithms`).
+    #: The shared `SearchSettings` this strategy reads (shown by `GET /algorithms`).
     uses: ClassVar[tuple[str, ...]] = ("population", "generations")
     #: This strategy's own settings, validated from the run config's `options`.
     Options: ClassVar[type[BaseModel]] = NoOptions
@@ -66,24 +66,24 @@ class Strategy(ABC):
     #: rather than a whole generation at once.
     streaming: ClassVar[bool] = False
 
-    def __init__(self, config: GAConfig, encoding: Encoding) -> None:
+    def __init__(self, config: SearchSettings, encoding: Encoding) -> None:
         self.config = config
         self.encoding = encoding
         self.options = self.Options.model_validate(dict(config.options))
 
     @classmethod  # noqa: B027 - optional: by default nothing to check
-    def check(cls, config: GAConfig) -> None:
+    def check(cls, config: SearchSettings) -> None:
         """Raise ValueError (naming the field) for settings this strategy cannot run with."""
 
     @classmethod
-    def breeds_on(cls, config: GAConfig, setting: str) -> bool:
+    def breeds_on(cls, config: SearchSettings, setting: str) -> bool:
         """Whether this strategy's choices read the shared `setting` of `config` (by default: it
         is in `uses`). Objectives and descriptors it does not read only fill what any run keeps
         beside its search (the front, the archive), which `softevo run` says in one line."""
         return setting in cls.uses
 
     @classmethod
-    def state_genomes(cls, config: GAConfig) -> int:
+    def state_genomes(cls, config: SearchSettings) -> int:
         """Most genomes the run's state holds at once (the service's budget counts them): by
         default a population, the generation the next is bred from."""
         return config.population
@@ -140,7 +140,7 @@ class Strategy(ABC):
         stats = generation_stats(
             state.generation,
             values,
-            [individual.genome for individual in individuals],
+            self.encoding.diversity([individual.genome for individual in individuals]),
             best[1] if best is not None else math.nan,
             **counts,
         )

@@ -15,19 +15,28 @@ import threading
 import time
 from collections import deque
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 
 from softevo.core.evaluator import CHECK_SECONDS, BatchResult, Evaluator, hand_over, names_digest
+from softevo.core.search.state import GAState, Individual
+from softevo.core.search.steady_state import Birth, Nursery, SteadyState
+from softevo.core.search.step import Hooks, Step
+from softevo.core.search.strategy import Strategy
 
-if TYPE_CHECKING:
-    from softevo.core.search.generation import Hooks, Step, Stepper
-    from softevo.core.search.state import GAState
-    from softevo.core.search.steady_state import Birth, Nursery
+
+class Stepper(Protocol):
+    """What the streaming step reads of the run's `generation.Stepper`."""
+
+    @property
+    def algorithm(self) -> Strategy: ...
+    def robot_file(self, individual: Individual) -> dict[str, Any]: ...
+    def flights(self, evaluator: Evaluator, alarm: threading.Event | None) -> Flights: ...
+
 
 #: What a batch thread hands back: the births it held, its result or what it raised.
-Landing = tuple[list["Birth"], BatchResult | None, BaseException | None]
+Landing = tuple[list[Birth], BatchResult | None, BaseException | None]
 
 
 @dataclass
@@ -147,10 +156,11 @@ def stream_step(
     measures: dict[str, dict[str, float]],
 ) -> Step:
     """Tell `population` births of a streaming strategy, in birth order (see the module)."""
-    from softevo.core.search.generation import Step
-
     started = time.perf_counter()
-    nursery = stepper.algorithm.nursery(state, cache)  # type: ignore[attr-defined]
+    strategy = stepper.algorithm
+    if not isinstance(strategy, SteadyState):
+        raise TypeError(f"{strategy.name} is not told one birth at a time")
+    nursery = strategy.nursery(state, cache)
     flights = stepper.flights(evaluator, hooks.alarm)
     row = _Row(stepper, nursery, cache, measures, hooks, key)
     row.keep(list(nursery.window))

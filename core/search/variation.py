@@ -24,11 +24,11 @@ from softevo.core.search import operators
 from softevo.core.search.state import Individual
 
 if TYPE_CHECKING:
-    from softevo.core.search.algorithm import GAConfig
+    from softevo.core.search.settings import SearchSettings
 
 
 def mate(
-    config: GAConfig,
+    config: SearchSettings,
     encoding: Encoding,
     pair: tuple[Individual, Individual],
     indices: tuple[int, int],
@@ -38,12 +38,15 @@ def mate(
     """Two children of `pair`: with probability `crossover_probability` a two-point crossover
     of each gene segment (a voxel's own real genes cut with its label), else copies; each then
     mutated with probability `mutation_probability`. Parents are named by `indices`. An
-    encoding that brings its own operators (`cppn`: NEAT) breeds its children itself.
+    encoding that brings its own operators (`Encoding.variation`; `cppn`: NEAT) breeds them.
     `children=1` leaves out the second child's mutation, the last draws: the first child is
     the same (steady-state keeps one child a birth and draws nothing after it)."""
-    own = getattr(encoding, "mate", None)
-    if own is not None:
-        return own(config, pair, indices, rng)
+    if encoding.variation is not None:
+        crossed, bred = encoding.variation.mate(config, pair[0].genome, pair[1].genome, rng)
+        return [
+            Individual(genome, label, _parents(crossed, indices, k))
+            for k, (genome, label) in enumerate(bred)
+        ]
     operator, (a, ra), (b, rb) = _crossed(config, encoding, pair, rng)
     bred = []
     for k, (discrete, real) in enumerate(((a, ra), (b, rb))[:children]):
@@ -54,19 +57,24 @@ def mate(
                 discrete, encoding.alphabet, config.mutation_genes, rng
             )
             real = operators.mutate_real(real, encoding.real_bounds, config.mutation_sigma, rng)
-        parents = tuple(int(i) for i in indices) if operator == "crossover" else (int(indices[k]),)
+        parents = _parents(operator == "crossover", indices, k)
         bred.append(Individual(encoding.genome(discrete, real), label, parents))
     return bred
 
 
 def mutant(
-    config: GAConfig, encoding: Encoding, parent: Individual, index: int, rng: np.random.Generator
+    config: SearchSettings,
+    encoding: Encoding,
+    parent: Individual,
+    index: int,
+    rng: np.random.Generator,
 ) -> Individual:
     """A mutated copy of `parent` (at least one discrete gene redrawn, real genes stepped; an
     encoding that brings its own operators mutates it itself)."""
-    own = getattr(encoding, "mutate", None)
-    if own is not None:
-        return own(config, parent, index, rng)
+    if encoding.variation is not None:
+        return Individual(
+            encoding.variation.mutate(config, parent.genome, rng), "copy+mutation", (index,)
+        )
     genome = parent.genome
     discrete = operators.mutate_discrete(
         np.array(genome.discrete), encoding.alphabet, max(1, config.mutation_genes), rng
@@ -78,7 +86,7 @@ def mutant(
 
 
 def _crossed(
-    config: GAConfig,
+    config: SearchSettings,
     encoding: Encoding,
     pair: tuple[Individual, Individual],
     rng: np.random.Generator,
@@ -101,6 +109,11 @@ def _crossed(
         else:
             ra, rb, _ = operators.two_point_crossover(ra, rb, rng)
     return operator, (a, ra), (b, rb)
+
+
+def _parents(crossed: bool, indices: tuple[int, int], k: int) -> tuple[int, ...]:
+    """A crossed child's parents are both; a copy's, the one it copies."""
+    return tuple(int(i) for i in indices) if crossed else (int(indices[k]),)
 
 
 def _cut_with_labels(
@@ -134,7 +147,7 @@ def gene_rate(encoding: Encoding, mutated_genes: float) -> float:
 
 
 def _mutated(
-    config: GAConfig,
+    config: SearchSettings,
     encoding: Encoding,
     discrete: np.ndarray,
     real: np.ndarray,
@@ -162,7 +175,7 @@ def unseen(
 
 
 def explore_children(
-    config: GAConfig,
+    config: SearchSettings,
     encoding: Encoding,
     parents: Sequence[Individual],
     mates: np.ndarray,
@@ -182,7 +195,7 @@ def explore_children(
 
 
 def _pair(
-    config: GAConfig,
+    config: SearchSettings,
     encoding: Encoding,
     pair: tuple[Individual, Individual],
     indices: tuple[int, int],
@@ -202,7 +215,7 @@ def _pair(
 
 
 def explore_mutants(
-    config: GAConfig,
+    config: SearchSettings,
     encoding: Encoding,
     parents: Sequence[Individual],
     chosen: Sequence[int],
@@ -219,7 +232,7 @@ def explore_mutants(
 
 
 def _one_mutant(
-    config: GAConfig,
+    config: SearchSettings,
     encoding: Encoding,
     parent: Individual,
     index: int,
@@ -230,7 +243,7 @@ def _one_mutant(
 
 
 def _mutant(
-    config: GAConfig,
+    config: SearchSettings,
     encoding: Encoding,
     parent: Individual,
     index: int,

@@ -40,7 +40,7 @@ from typing import Any
 from softevo.client import Client
 from softevo.core.config import resolve
 from softevo.core.evaluator import BatchResult, Evaluator
-from softevo.core.search.evolution import Evolution
+from softevo.core.evolution import Evolution
 
 #: Runs the private service drives at once: one, so that wall times are each run's own.
 RUNNING = 1

@@ -7,10 +7,10 @@ from __future__ import annotations
 from fastapi.testclient import TestClient
 
 from softevo.core.config import resolve
+from softevo.core.evolution import Evolution
 from softevo.core.physics import simulate
 from softevo.core.physics.evaluation import SerialEvaluator
 from softevo.core.robots.robot_file import parse_robot
-from softevo.core.search.evolution import Evolution
 from tests.api.finished import finished
 
 HEADING = {

@@ -19,7 +19,7 @@ import pytest
 from sqlalchemy import Engine, create_engine, text
 
 from softevo.api.db import Database, normalise_url
-from softevo.core.search.evolution import CURVE_COLUMNS
+from softevo.core.evolution import CURVE_COLUMNS
 from softevo.local_service import LocalService, ServiceError, start_service
 from tests.reference import front_points, undisturbed
 

@@ -22,8 +22,8 @@ from softevo.api.app import create_app
 from softevo.api.db import Database
 from softevo.api.settings import Settings
 from softevo.core.config import resolve
+from softevo.core.evolution import CURVE_COLUMNS, Evolution
 from softevo.core.physics.evaluation import SerialEvaluator
-from softevo.core.search.evolution import CURVE_COLUMNS, Evolution
 from tests.services import PostgresServer, TcpProxy
 
 pytestmark = [pytest.mark.postgres, pytest.mark.slow, pytest.mark.fault]

@@ -20,8 +20,8 @@ from softevo.api import store
 from softevo.api.db import Database
 from softevo.api.settings import Limits
 from softevo.core.config import resolve
+from softevo.core.evolution import CURVE_COLUMNS, Evolution
 from softevo.core.physics.evaluation import SerialEvaluator
-from softevo.core.search.evolution import CURVE_COLUMNS, Evolution
 
 SMALL = {"preset": "quick", "seed": 1, "population": 6, "generations": 3}
 JSON = {"content-type": "application/json"}

@@ -8,9 +8,9 @@ import json
 from fastapi.testclient import TestClient
 
 from softevo.core.config import resolve
+from softevo.core.evolution import Evolution
 from softevo.core.nulls import to_null_record
 from softevo.core.physics.evaluation import SerialEvaluator
-from softevo.core.search.evolution import Evolution
 from tests.api.finished import finished
 
 REQUEST = {

@@ -12,8 +12,8 @@ from softevo.api.coordinator import Coordinator
 from softevo.api.db import Database
 from softevo.api.models import IndividualRow
 from softevo.core.config import resolve
+from softevo.core.evolution import Evolution
 from softevo.core.physics.evaluation import SerialEvaluator
-from softevo.core.search.evolution import Evolution
 from softevo.worker.evaluator import RQEvaluator
 from tests.api.test_coordinator import FreezingEvaluator, drive, wait_status
 from tests.reference import undisturbed

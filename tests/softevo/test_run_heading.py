@@ -8,9 +8,9 @@ import json
 from pathlib import Path
 
 from softevo.core.config import resolve
+from softevo.core.evolution import Evolution
 from softevo.core.outputs.archive_figures import archive_figure
 from softevo.core.physics.evaluation import SerialEvaluator
-from softevo.core.search.evolution import Evolution
 from tests.softevo.inprocess import softevo
 
 

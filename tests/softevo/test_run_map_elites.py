@@ -7,8 +7,8 @@ import json
 from pathlib import Path
 
 from softevo.core.config import resolve
+from softevo.core.evolution import Evolution
 from softevo.core.physics.evaluation import SerialEvaluator
-from softevo.core.search.evolution import Evolution
 from tests.softevo.inprocess import softevo
 
 

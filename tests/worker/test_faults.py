@@ -38,10 +38,10 @@ from rq.registry import FinishedJobRegistry, StartedJobRegistry
 from softevo.api.app import create_app
 from softevo.api.settings import Settings
 from softevo.core.config import resolve
+from softevo.core.evolution import CURVE_COLUMNS, Evolution
 from softevo.core.limits import SAVE_SECONDS
 from softevo.core.physics.evaluation import SerialEvaluator
 from softevo.core.robots.robot_file import robot_to_json
-from softevo.core.search.evolution import CURVE_COLUMNS, Evolution
 from softevo.worker.evaluator import RQEvaluator, work_units
 from softevo.worker.queue import QUEUE, SERIALIZER, result_key
 from tests.services import RedisServer, Workers

@@ -12,9 +12,9 @@ from rq import Queue
 from rq.job import JobStatus
 
 from softevo.core.config import resolve
+from softevo.core.evolution import Evolution
 from softevo.core.physics.evaluation import SerialEvaluator
 from softevo.core.robots.robot_file import robot_to_json
-from softevo.core.search.evolution import Evolution
 from softevo.worker.evaluator import RQEvaluator
 from softevo.worker.queue import JOB_FUNCTION, QUEUE, SERIALIZER, connect
 from tests.services import RedisServer, Workers

@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 
 from softevo.core.config import resolve
+from softevo.core.evolution import Evolution
 from softevo.core.physics.evaluation import PRELOAD, PoolEvaluator, SerialEvaluator, pool_context
 from softevo.core.robots.robot_file import robot_to_json
-from softevo.core.search.evolution import Evolution
 from tests.core.search.test_evolution import SMALL
 
 

@@ -443,8 +443,8 @@ def test_a_robot_whose_integration_diverged_is_unstable_not_fast() -> None:
     won the run. Every such robot is unstable with a NaN speed; a robot at the paper's dt is
     stable, its springs nowhere near the stretch limit."""
     from softevo.core.config import resolve
+    from softevo.core.evolution import Evolution
     from softevo.core.physics.simulate import MAX_STRETCH
-    from softevo.core.search.evolution import Evolution
 
     request = {"preset": "quick", "seed": 4, "population": 16, "generations": 1}
     for dt, diverges in ((0.003, True), (0.0005, False)):

@@ -12,19 +12,21 @@ from softevo.core.config import ConfigError, resolve
 from softevo.core.robots.cppn import (
     ACTIVATIONS,
     OUTPUT_IDS,
-    CppnEncoding,
     Network,
     activate,
     innovation,
     split_node,
 )
-from softevo.core.robots.encodings import EncodingError, make_encoding
+from softevo.core.robots.cppn_encoding import CppnEncoding
+from softevo.core.robots.cppn_variation import _add_connection, _add_node, crossover
+from softevo.core.robots.encoding_registry import make_encoding
+from softevo.core.robots.encodings import EncodingError
 from softevo.core.robots.genome import Genome
 from softevo.core.robots.robot_file import parse_robot, robot_to_json
 from softevo.core.robots.settings import SimSettings
 from softevo.core.search.algorithm import GAConfig
-from softevo.core.search.cppn_variation import _add_connection, _add_node, crossover, mate, mutant
 from softevo.core.search.state import Individual
+from softevo.core.search.variation import mate, mutant
 
 SIM = SimSettings(duration=0.3, settle_time=0.1)
 

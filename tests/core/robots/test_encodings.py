@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from softevo.core.physics import simulate
-from softevo.core.robots.encodings import EncodingError, make_encoding
+from softevo.core.robots.encoding_registry import make_encoding
+from softevo.core.robots.encodings import EncodingError
 from softevo.core.robots.genome import Genome
 from softevo.core.robots.robot_file import parse_robot, robot_to_json
 from softevo.core.robots.settings import sim_settings

@@ -11,14 +11,15 @@ import numpy as np
 import pytest
 
 from softevo.core.config import resolve
+from softevo.core.evolution import Evolution
 from softevo.core.physics import simulate
 from softevo.core.physics.evaluation import PoolEvaluator, SerialEvaluator
-from softevo.core.robots.encodings import VoxelPhaseEncoding, make_encoding
+from softevo.core.robots.encoding_registry import make_encoding
+from softevo.core.robots.encodings import VoxelPhaseEncoding
 from softevo.core.robots.robot import Actuation, VoxelRobot, build_mechanics
 from softevo.core.robots.robot_file import RobotFileError, load_robot, parse_robot, robot_to_json
 from softevo.core.robots.settings import SimSettings
 from softevo.core.search.algorithm import GAConfig, Individual
-from softevo.core.search.evolution import Evolution
 from softevo.core.search.variation import mate
 
 EXAMPLES = sorted((Path(__file__).resolve().parents[3] / "examples").glob("*.json"))

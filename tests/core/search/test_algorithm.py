@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from softevo.core.config import resolve
-from softevo.core.robots.encodings import make_encoding
+from softevo.core.robots.encoding_registry import make_encoding
 from softevo.core.search.algorithm import GAConfig, GAState, Strategy, make_strategy
 from softevo.core.search.stats import GenerationStats
 

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from softevo.core.config import resolve
+from softevo.core.evolution import Evolution
 from softevo.core.physics.evaluation import PoolEvaluator, SerialEvaluator
 from softevo.core.robots.robot_file import robot_to_json
-from softevo.core.search.evolution import Evolution
 
 SMALL = {"preset": "quick", "generations": 6, "population": 10}
 

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from softevo.core.config import ConfigError, resolve
+from softevo.core.evolution import Evolution
 from softevo.core.physics.evaluation import SerialEvaluator
-from softevo.core.robots.encodings import make_encoding
+from softevo.core.robots.encoding_registry import make_encoding
 from softevo.core.search import operators, pareto
 from softevo.core.search.algorithm import GAConfig
-from softevo.core.search.evolution import Evolution
 from softevo.core.search.state import Individual
 from softevo.core.search.variation import explore_children, explore_mutants, gene_rate
 from tests.core.search.test_nsga2_afpo import Run

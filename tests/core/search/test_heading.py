@@ -10,6 +10,7 @@ import math
 import pytest
 
 from softevo.core.config import ConfigError, resolve
+from softevo.core.evolution import Evolution
 from softevo.core.nulls import to_null_record
 from softevo.core.physics import simulate, simulate_batch
 from softevo.core.physics.evaluation import PoolEvaluator, SerialEvaluator, evaluate_robot_files
@@ -17,7 +18,6 @@ from softevo.core.robots.robot import Actuation, VoxelRobot
 from softevo.core.robots.robot_file import robot_to_json
 from softevo.core.robots.settings import sim_settings
 from softevo.core.search.descriptors import CATALOGUE, MEASURED, describe
-from softevo.core.search.evolution import Evolution
 from softevo.results import read_resumable, write_results
 
 HEADING = {

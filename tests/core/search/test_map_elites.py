@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 
 from softevo.core.config import ConfigError, resolve
+from softevo.core.evolution import Evolution
 from softevo.core.physics.evaluation import PoolEvaluator, SerialEvaluator
 from softevo.core.robots.genome import Genome
 from softevo.core.robots.lattice import largest_component
 from softevo.core.search.archive import Archive
 from softevo.core.search.descriptors import describe, largest_group
-from softevo.core.search.evolution import Evolution
 from softevo.core.search.state import GAState
 
 QD = {

@@ -11,7 +11,8 @@ import pytest
 
 from softevo import library
 from softevo.core.config import ConfigError, resolve
-from softevo.core.robots.encodings import VoxelEncoding
+from softevo.core.robots.encodings import Variation, VoxelEncoding
+from softevo.core.robots.genome import Genome
 from softevo.core.search.algorithm import describe_strategies, make_strategy
 from softevo.core.search.archive import Archive
 from softevo.core.search.map_elites import spread_random
@@ -143,13 +144,17 @@ def test_mutation_only_children_are_mutants_of_elites(real: str) -> None:
 
 def test_an_encoding_with_its_own_operators_mutates_its_genomes() -> None:
     strategy, state = elites_state(MUTATION)
-    seen = []
+    seen: list[Genome] = []
 
-    def mutate(config, parent, index, rng):  # what a CPPN encoding brings (NEAT mutations)
-        seen.append(index)
-        return Individual(parent.genome, "copy+mutation", (index,))
+    class Own(Variation):  # what a CPPN encoding brings (NEAT mutations)
+        def mate(self, rates, first, second, rng):  # never called here
+            raise AssertionError("map-elites with mutation only mutates")
 
-    strategy.encoding.mutate = mutate
+        def mutate(self, rates, genome, rng):
+            seen.append(genome)
+            return genome
+
+    strategy.encoding.variation = Own()  # this instance alone
     children = strategy.ask(state)
     assert len(seen) == 5 and {c.operator for c in children[:-1]} == {"elite-copy+mutation"}
 

@@ -10,7 +10,7 @@ import re
 import numpy as np
 import pytest
 
-from softevo.core.robots.encodings import make_encoding
+from softevo.core.robots.encoding_registry import make_encoding
 from softevo.core.search import pareto
 from softevo.core.search.algorithm import GAConfig, GAState, make_strategy
 from softevo.core.search.state import Individual

@@ -11,8 +11,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from softevo.core.robots.genome import Genome
+from softevo.core.robots.genome import gene_diversity as diversity
 from softevo.core.search import operators
-from softevo.core.search.stats import diversity
 
 seeds = st.integers(0, 2**32 - 1)
 

@@ -15,8 +15,8 @@ import pytest
 
 from softevo.core.config import ConfigError, resolve
 from softevo.core.evaluator import BatchResult, Evaluator
+from softevo.core.evolution import Evolution
 from softevo.core.physics.evaluation import PoolEvaluator, SerialEvaluator
-from softevo.core.search.evolution import Evolution
 from softevo.core.search.state import GAState
 from softevo.core.search.steady_state import KEY
 

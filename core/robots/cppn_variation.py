@@ -2,16 +2,16 @@
 (splitting a connection), add a connection, change an activation, step the robot's a and c;
 crossover aligns connections by innovation number. Every draw comes from the generator given.
 
-The strategies call these through `softevo.core.search.variation` when the run's encoding is
-`cppn`: a crossover happens with the run's `crossover_probability`; a crossed child is mutated
-with its `mutation_probability`, a copy always (a plain copy would be its parent again);
+The `cppn` encoding brings them as its `variation` (`NeatVariation`), which
+`softevo.core.search.variation` calls in place of its segment-wise operators: a crossover
+happens with the run's `crossover_probability`; a crossed child is mutated with its
+`mutation_probability`, a copy always (a plain copy would be its parent again);
 `mutation_genes` NEAT mutations a mutated child (at least one).
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -25,16 +25,12 @@ from softevo.core.robots.cppn import (
     WEIGHT_RATE,
     WEIGHT_SIGMA,
     Connection,
-    CppnEncoding,
     Network,
     innovation,
     split_node,
 )
-from softevo.core.robots.encodings import EncodingError
-from softevo.core.search.state import Individual
-
-if TYPE_CHECKING:
-    from softevo.core.search.algorithm import GAConfig
+from softevo.core.robots.encodings import EncodingError, Rates, Variation
+from softevo.core.robots.genome import Genome
 
 _KINDS = tuple(kind for kind, _ in MUTATIONS)
 _CHANCES = np.array([chance for _, chance in MUTATIONS])
@@ -156,38 +152,29 @@ def _mutated(network: Network, count: int, rng: np.random.Generator) -> Network:
     return network
 
 
-def mate(
-    config: GAConfig,
-    encoding: CppnEncoding,
-    pair: tuple[Individual, Individual],
-    indices: tuple[int, int],
-    rng: np.random.Generator,
-) -> list[Individual]:
-    """Two children of `pair` (see the module's docstring for the rates)."""
-    first, second = (Network.from_genome(item.genome) for item in pair)
-    crossed = rng.random() < config.crossover_probability
-    if crossed:
-        networks = [crossover(first, second, rng), crossover(second, first, rng)]
-    else:
-        networks = [first, second]
-    children = []
-    for k, network in enumerate(networks):
-        label = "crossover" if crossed else "copy"
-        if not crossed or rng.random() < config.mutation_probability:
-            label += "+mutation"
-            network = _mutated(network, config.mutation_genes, rng)
-        parents = tuple(int(i) for i in indices) if crossed else (int(indices[k]),)
-        children.append(Individual(network.genome(), label, parents))
-    return children
+class NeatVariation(Variation):
+    """The `cppn` encoding's own operators, which the strategies use in place of the
+    segment-wise ones (see the module's docstring for the rates)."""
 
+    def mate(
+        self, rates: Rates, first: Genome, second: Genome, rng: np.random.Generator
+    ) -> tuple[bool, list[tuple[Genome, str]]]:
+        networks = [Network.from_genome(first), Network.from_genome(second)]
+        crossed = rng.random() < rates.crossover_probability
+        if crossed:
+            networks = [
+                crossover(networks[0], networks[1], rng),
+                crossover(networks[1], networks[0], rng),
+            ]
+        children = []
+        for network in networks:
+            label = "crossover" if crossed else "copy"
+            if not crossed or rng.random() < rates.mutation_probability:
+                label += "+mutation"
+                network = _mutated(network, rates.mutation_genes, rng)
+            children.append((network.genome(), label))
+        return crossed, children
 
-def mutant(
-    config: GAConfig,
-    encoding: CppnEncoding,
-    parent: Individual,
-    index: int,
-    rng: np.random.Generator,
-) -> Individual:
-    """A mutated copy of `parent` (`mutation_genes` NEAT mutations, at least one)."""
-    network = _mutated(Network.from_genome(parent.genome), config.mutation_genes, rng)
-    return Individual(network.genome(), "copy+mutation", (index,))
+    def mutate(self, rates: Rates, genome: Genome, rng: np.random.Generator) -> Genome:
+        """`mutation_genes` NEAT mutations (at least one)."""
+        return _mutated(Network.from_genome(genome), rates.mutation_genes, rng).genome()
