@@ -253,7 +253,8 @@ def test_every_variable_is_documented_in_env_example() -> None:
     }
     used = variables_used(load_compose())
     assert used == {
-        "POSTGRES_PASSWORD", "REDIS_PASSWORD", "SOFTEVO_API_TOKEN", "SOFTEVO_PROTECT_READS"
+        "POSTGRES_PASSWORD", "REDIS_PASSWORD", "SOFTEVO_API_TOKEN", "SOFTEVO_PROTECT_READS",
+        "SOFTEVO_WORKER_CLASS",
     }  # fmt: skip
     assert used <= documented, f"missing from .env.example: {used - documented}"
 
