@@ -88,18 +88,18 @@ class Database:
         return self.engine.dialect.name == "sqlite"
 
     @contextmanager
-    def read(self) -> Iterator[Session]:
+    def read_session(self) -> Iterator[Session]:
         with self._read() as session:
             yield session
 
     @contextmanager
-    def write(self) -> Iterator[Session]:
+    def write_session(self) -> Iterator[Session]:
         """One transaction: committed on success, rolled back on any exception."""
         with self._write() as session, session.begin():
             yield session
 
     @contextmanager
-    def writing(self) -> Iterator[Connection]:
+    def write_connection(self) -> Iterator[Connection]:
         """One transaction on a bare connection (no ORM session): for the statements a driver
         runs several times a generation, which need none of the session's bookkeeping."""
         with self._writer.begin() as connection:

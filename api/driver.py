@@ -264,7 +264,11 @@ class RunDriver(Hooks):
 def members(individuals: list[Individual]) -> list[dict[str, Any]]:
     """Individuals as the store keeps them."""
     return [
-        {"genome": EncodedJSON(item.genome.canonical), "genome_hash": item.genome.hash,
-         "operator": item.operator, "parents": EncodedJSON(parents_text(item.parents))}
+        {
+            "genome": EncodedJSON(item.genome.canonical),
+            "genome_hash": item.genome.hash,
+            "operator": item.operator,
+            "parents": EncodedJSON(parents_text(item.parents)),
+        }
         for item in individuals
-    ]  # fmt: skip
+    ]

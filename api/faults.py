@@ -37,8 +37,9 @@ class Faults:
                 return
             self._logged[said] = (now, 0)
         suffix = f" ({repeats} more times in the last minute)" if repeats else ""
-        log.error("%s: cannot write to the database: %s%s", where, said, suffix,
-                  exc_info=not repeats)  # fmt: skip
+        log.error(
+            "%s: cannot write to the database: %s%s", where, said, suffix, exc_info=not repeats
+        )
 
     def clear(self) -> None:
         with self._lock:

@@ -57,7 +57,7 @@ class Sweep(Base):
     created_at: Mapped[datetime] = mapped_column()
 
 
-class Run(Base):
+class RunRow(Base):
     __tablename__ = "runs"
 
     id: Mapped[int] = mapped_column(Integer, primary_key=True)
@@ -86,7 +86,7 @@ class Run(Base):
     takeovers: Mapped[int] = mapped_column(Integer, default=0)
 
 
-class Generation(Base):
+class GenerationRow(Base):
     __tablename__ = "generations"
     __table_args__ = (UniqueConstraint("run_id", "generation", name="uq_generation"),)
 
@@ -112,7 +112,7 @@ class Generation(Base):
     committed_at: Mapped[datetime] = mapped_column()
 
 
-class Individual(Base):
+class IndividualRow(Base):
     __tablename__ = "individuals"
     __table_args__ = (
         UniqueConstraint("run_id", "generation", "index", name="uq_individual"),

@@ -48,8 +48,12 @@ class ReadTokenMiddleware:
             return
         sent = sent_token(scope)
         if sent is None:
-            await _refuse(send, 401, "reads need the bearer token on this service "
-                          "(SOFTEVO_PROTECT_READS): Authorization: Bearer <token>")  # fmt: skip
+            await _refuse(
+                send,
+                401,
+                "reads need the bearer token on this service "
+                "(SOFTEVO_PROTECT_READS): Authorization: Bearer <token>",
+            )
         elif not hmac.compare_digest(sent.encode(), self.token):
             await _refuse(send, 403, "wrong bearer token")
         else:

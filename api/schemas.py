@@ -133,10 +133,12 @@ class SweepCreate(RunSettings):  # type: ignore[misc, valid-type]
     )
     seeds: list[Seed] = Field(default_factory=lambda: [1, 2, 3], min_length=1, max_length=1000)
     tasks: list[Literal[tuple(TASKS)]] | None = Field(  # type: ignore[valid-type]
-        None, min_length=1, max_length=len(TASKS),
+        None,
+        min_length=1,
+        max_length=len(TASKS),
         description="task presets to sweep instead of boxes (GET /presets), e.g. "
         '["task-flat", "task-slope"]',
-    )  # fmt: skip
+    )
 
 
 class RunProgress(BaseModel):

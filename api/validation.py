@@ -48,18 +48,24 @@ def check_budget(configs: list[RunConfig], limits: Limits, loc: list[str | int])
     cost = total_cost(configs)
     what = "this run" if len(configs) == 1 else f"these {len(configs)} runs"
     if cost.spring_steps > limits.max_spring_steps:
-        raise RequestError(loc, f"{what} could simulate {cost.spring_steps:.3g} spring-steps "
-                           "(springs of the box x steps x simulations x the terrain's and "
-                           "objective's cost factor), over the budget of "
-                           f"{limits.max_spring_steps:.3g}; ask for less (population, "
-                           "generations, shape, sim.duration, sim.dt) or raise "
-                           "SOFTEVO_MAX_SPRING_STEPS")  # fmt: skip
+        raise RequestError(
+            loc,
+            f"{what} could simulate {cost.spring_steps:.3g} spring-steps "
+            "(springs of the box x steps x simulations x the terrain's and "
+            "objective's cost factor), over the budget of "
+            f"{limits.max_spring_steps:.3g}; ask for less (population, "
+            "generations, shape, sim.duration, sim.dt) or raise "
+            "SOFTEVO_MAX_SPRING_STEPS",
+        )
     if cost.stored_bytes > limits.max_stored_bytes:
-        raise RequestError(loc, f"{what} would store about {cost.stored_bytes:.3g} bytes of "
-                           f"individuals, state and archive, over the budget of "
-                           f"{limits.max_stored_bytes:.3g}; ask for less (population, "
-                           "generations, shape, bins, options.window) or raise "
-                           "SOFTEVO_MAX_STORED_BYTES")  # fmt: skip
+        raise RequestError(
+            loc,
+            f"{what} would store about {cost.stored_bytes:.3g} bytes of "
+            f"individuals, state and archive, over the budget of "
+            f"{limits.max_stored_bytes:.3g}; ask for less (population, "
+            "generations, shape, bins, options.window) or raise "
+            "SOFTEVO_MAX_STORED_BYTES",
+        )
 
 
 def check_limits(config: RunConfig, limits: Limits, prefix: tuple[str, ...] = ()) -> None:
@@ -69,25 +75,41 @@ def check_limits(config: RunConfig, limits: Limits, prefix: tuple[str, ...] = ()
         raise RequestError([*prefix, *loc], message)
 
     if config.population > limits.max_population:
-        refuse(["population"], f"population: {config.population} is over the limit of "
-               f"{limits.max_population} (SOFTEVO_MAX_POPULATION)")  # fmt: skip
+        refuse(
+            ["population"],
+            f"population: {config.population} is over the limit of "
+            f"{limits.max_population} (SOFTEVO_MAX_POPULATION)",
+        )
     if config.generations > limits.max_generations:
-        refuse(["generations"], f"generations: {config.generations} is over the limit of "
-               f"{limits.max_generations} (SOFTEVO_MAX_GENERATIONS)")  # fmt: skip
+        refuse(
+            ["generations"],
+            f"generations: {config.generations} is over the limit of "
+            f"{limits.max_generations} (SOFTEVO_MAX_GENERATIONS)",
+        )
     voxels = math.prod(config.shape)
     if voxels > limits.max_voxels:
-        refuse(["shape"], f"shape: {voxels} voxels is over the limit of {limits.max_voxels} "
-               "(SOFTEVO_MAX_VOXELS)")  # fmt: skip
+        refuse(
+            ["shape"],
+            f"shape: {voxels} voxels is over the limit of {limits.max_voxels} (SOFTEVO_MAX_VOXELS)",
+        )
     if config.sim.duration > limits.max_duration:
-        refuse(["sim", "duration"], f"sim.duration: {config.sim.duration} s is over the limit "
-               f"of {limits.max_duration} s (SOFTEVO_MAX_DURATION)")  # fmt: skip
+        refuse(
+            ["sim", "duration"],
+            f"sim.duration: {config.sim.duration} s is over the limit "
+            f"of {limits.max_duration} s (SOFTEVO_MAX_DURATION)",
+        )
     if config.sim.step < limits.min_dt:
-        refuse(["sim", "dt"], f"sim.dt: {config.sim.step} s is under the limit of "
-               f"{limits.min_dt} s (SOFTEVO_MIN_DT)")  # fmt: skip
+        refuse(
+            ["sim", "dt"],
+            f"sim.dt: {config.sim.step} s is under the limit of {limits.min_dt} s (SOFTEVO_MIN_DT)",
+        )
     evaluations = config.population * config.generations
     if evaluations > limits.max_evaluations:
-        refuse(["generations"], f"population x generations = {evaluations} is over the limit "
-               f"of {limits.max_evaluations} (SOFTEVO_MAX_EVALUATIONS)")  # fmt: skip
+        refuse(
+            ["generations"],
+            f"population x generations = {evaluations} is over the limit "
+            f"of {limits.max_evaluations} (SOFTEVO_MAX_EVALUATIONS)",
+        )
 
 
 def point_to_sim(problem: dict[str, Any]) -> dict[str, Any]:

@@ -126,9 +126,11 @@ def bench_backend(
         run_id, wall, run = run_to_completion(client)
         progress = run["progress"]
         simulations = progress["evaluations"]
-        print(f"{name:<12}{wall:>8.1f} s   {progress['generation']} generations, "
-              f"{simulations} simulations ({simulations / wall:.0f}/s over the wall time), "
-              f"{progress['saved']} from the cache")  # fmt: skip
+        print(
+            f"{name:<12}{wall:>8.1f} s   {progress['generation']} generations, "
+            f"{simulations} simulations ({simulations / wall:.0f}/s over the wall time), "
+            f"{progress['saved']} from the cache"
+        )
         curve = client.get(f"/runs/{run_id}/curve").json()
         one = client.get(f"/runs/{run_id}/individuals?generation=0&limit=1000").json()
         page = client.get(f"/runs/{run_id}/individuals?limit=1000").json()
@@ -137,10 +139,12 @@ def bench_backend(
         assert len(page["items"]) == 1000 and page["total"] == GENERATIONS * POPULATION
         endpoints: list[tuple[str, Callable[[int], str]]] = [
             ("curve (100 rows)", lambda _i: f"/runs/{run_id}/curve"),
-            ("individuals, 1 generation (25)",
-             lambda i: f"/runs/{run_id}/individuals?generation={i % GENERATIONS}&limit=1000"),
+            (
+                "individuals, 1 generation (25)",
+                lambda i: f"/runs/{run_id}/individuals?generation={i % GENERATIONS}&limit=1000",
+            ),
             ("individuals, limit=1000", lambda _i: f"/runs/{run_id}/individuals?limit=1000"),
-        ]  # fmt: skip
+        ]
         for label, path in endpoints:
             p50, p99, size = latency(client, path, requests, warmup)
             rows.append((name, label, p50, p99, size))
@@ -161,16 +165,21 @@ def main() -> None:
     args = parser.parse_args()
 
     print(f"machine: {os.cpu_count()} cores, {cpu_model()}, Python {platform.python_version()}")
-    print(f"run: quick preset, {GENERATIONS} generations x {POPULATION} robots, 0.6 s simulations, "
-          "softevo serve (in-process pool, one process per core)")  # fmt: skip
-    print(f"latency: {args.requests} sequential requests per endpoint after {args.warmup} "
-          "to warm up, one keep-alive connection\n")  # fmt: skip
+    print(
+        f"run: quick preset, {GENERATIONS} generations x {POPULATION} robots, 0.6 s simulations, "
+        "softevo serve (in-process pool, one process per core)"
+    )
+    print(
+        f"latency: {args.requests} sequential requests per endpoint after {args.warmup} "
+        "to warm up, one keep-alive connection\n"
+    )
     print(f"{'database':<12}{'run wall time':>13}")
     rows = []
     with tempfile.TemporaryDirectory(prefix="softevo-bench-api-") as tmp:
         workdir = Path(tmp)
-        rows += bench_backend("SQLite", f"sqlite:///{workdir / 'bench.db'}", workdir,
-                              args.requests, args.warmup)  # fmt: skip
+        rows += bench_backend(
+            "SQLite", f"sqlite:///{workdir / 'bench.db'}", workdir, args.requests, args.warmup
+        )
         why = None if args.skip_postgres else postgres_unreachable(args.postgres)
         if why is not None:
             shown = make_url(normalise_url(args.postgres)).render_as_string(hide_password=True)

@@ -97,7 +97,7 @@ def instant_evaluator(found: dict[str, Any], sim_seconds: float = 0.0) -> Any:
             fitness = [  # process's: its CPU is taken out of the figure (`drive`)
                 (f["voxels"].count("sine") + f["voxels"].count("neg_sine")) / len(f["voxels"])
                 for f in files
-            ]  # fmt: skip
+            ]
             output = job_output(fitness, form, record_text)
             with STAND_IN_LOCK:
                 STAND_IN_CPU[0] += time.thread_time() - started
@@ -132,9 +132,19 @@ def instant_evaluator(found: dict[str, Any], sim_seconds: float = 0.0) -> Any:
 #: A simulation's record of measures (`SimResult.measures`), for trees that keep it: the stand-in
 #: sends one per robot, as a real job does (energy not measured: a speed run).
 MEASURES = (
-    "distance", "speed", "forward_speed", "climb_rate", "heading", "energy", "cost_of_transport",
-    "efficiency", "stable", "total_mass", "masses", "springs",
-)  # fmt: skip
+    "distance",
+    "speed",
+    "forward_speed",
+    "climb_rate",
+    "heading",
+    "energy",
+    "cost_of_transport",
+    "efficiency",
+    "stable",
+    "total_mass",
+    "masses",
+    "springs",
+)
 
 
 def job_output(
@@ -149,10 +159,12 @@ def job_output(
         output["heading"] = [speed * 360.0 - 180.0 for speed in fitness]
     elif form == "measures":
         output["measures"] = [
-            {name: None if name == "energy" else speed * (1.0 + 0.1 * k)
-             for k, name in enumerate(MEASURES)}
+            {
+                name: None if name == "energy" else speed * (1.0 + 0.1 * k)
+                for k, name in enumerate(MEASURES)
+            }
             for speed in fitness
-        ]  # fmt: skip
+        ]
         if record_text is not None:
             output["texts"] = [record_text(record) for record in output["measures"]]
     return output
@@ -186,8 +198,12 @@ def drive(
     arithmetic, wall seconds, individuals, robots simulated)."""
     database = found["db"].Database(url)
     database.upgrade()
-    request = {"preset": "paper-voxel", "seed": 1, "generations": generations,
-               "population": POPULATION}  # fmt: skip
+    request = {
+        "preset": "paper-voxel",
+        "seed": 1,
+        "generations": generations,
+        "population": POPULATION,
+    }
     config = found["resolve"]({**request, **ALGORITHMS[algorithm]})
     run = found["create_run"](database, config)
     coordinator = found["Coordinator"](
@@ -253,9 +269,18 @@ def run_once(
 ) -> tuple[float, float, int, int]:
     """One run in a fresh interpreter (so neither tree's imports or caches help the other)."""
     command = [
-        sys.executable, "-P", __file__, "--once", database, "--generations", str(args.generations),
-        "--sim-seconds", str(args.sim_seconds), "--algorithms", algorithm,
-    ]  # fmt: skip
+        sys.executable,
+        "-P",
+        __file__,
+        "--once",
+        database,
+        "--generations",
+        str(args.generations),
+        "--sim-seconds",
+        str(args.sim_seconds),
+        "--algorithms",
+        algorithm,
+    ]
     env = dict(os.environ)
     if path is not None:
         command += ["--tree", path]
@@ -272,9 +297,11 @@ def main() -> None:
     parser.add_argument("--generations", type=int, default=60)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument(
-        "--sim-seconds", type=float, default=0.05,
+        "--sim-seconds",
+        type=float,
+        default=0.05,
         help="simulated seconds of wall time per robot (slept, no CPU; 0: instant)",
-    )  # fmt: skip
+    )
     parser.add_argument("--tree", help="also measure the checkout at this path, interleaved")
     parser.add_argument(
         "--algorithms",
@@ -319,8 +346,10 @@ def main() -> None:
             cpu = statistics.median(c / n for c, _, n, _ in rows[label]) * 1e3
             wall = statistics.median(w / args.generations for _, w, _, _ in rows[label])
             cpu_of[label] = cpu
-            print(f"{database:9} {label[-18:]:18} {cpu:11.3f} ms  {wall * 1e3:12.2f} ms  "
-                  f"{1 / wall:12.1f}")  # fmt: skip
+            print(
+                f"{database:9} {label[-18:]:18} {cpu:11.3f} ms  {wall * 1e3:12.2f} ms  "
+                f"{1 / wall:12.1f}"
+            )
         if len(trees) == 2:
             ratio = cpu_of[trees[0][0]] / cpu_of["this checkout"]
             print(f"{database:9} this checkout: {ratio:.2f}x less CPU per individual")
@@ -335,23 +364,29 @@ def compare_algorithms(args: argparse.Namespace, algorithms: list[str]) -> None:
         f"{args.population or 25}, "
         f"{args.sim_seconds:g} s per robot, median of {args.repeats} (algorithms interleaved)"
     )
-    print("database  algorithm           CPU/individual  / first's  simulated  CPU/simulation"
-          "  / first's")  # fmt: skip
+    print(
+        "database  algorithm           CPU/individual  / first's  simulated  CPU/simulation"
+        "  / first's"
+    )
     for database in ("sqlite", "postgres"):
         rows: dict[str, list[tuple[float, float, int, int]]] = {name: [] for name in algorithms}
         for _ in range(args.repeats):
             for name in algorithms:
                 rows[name].append(run_once(name, None, database, args, name))
         per = {  # CPU per individual and per simulated robot (ms), simulations
-            name: (statistics.median(c / n for c, _, n, _ in rows[name]) * 1e3,
-                   statistics.median(c / max(1, e) for c, _, _, e in rows[name]) * 1e3,
-                   statistics.median(e for *_, e in rows[name]))
+            name: (
+                statistics.median(c / n for c, _, n, _ in rows[name]) * 1e3,
+                statistics.median(c / max(1, e) for c, _, _, e in rows[name]) * 1e3,
+                statistics.median(e for *_, e in rows[name]),
+            )
             for name in algorithms
-        }  # fmt: skip
+        }
         first = per[algorithms[0]]
         for name, (cpu, per_sim, simulated) in per.items():
-            print(f"{database:9} {name:18} {cpu:11.3f} ms  {cpu / first[0]:8.2f}  {simulated:9.0f}"
-                  f"  {per_sim:11.3f} ms  {per_sim / first[1]:8.2f}")  # fmt: skip
+            print(
+                f"{database:9} {name:18} {cpu:11.3f} ms  {cpu / first[0]:8.2f}  {simulated:9.0f}"
+                f"  {per_sim:11.3f} ms  {per_sim / first[1]:8.2f}"
+            )
 
 
 if __name__ == "__main__":

@@ -60,9 +60,11 @@ def main() -> None:
         row = measure(shape, robots, seconds)
         base = base or row
         ratio = row["s_per_sim_s"] / base["s_per_sim_s"]
-        print(f"{'x'.join(map(str, shape)):10} {row['decode_ms']:9.2f} {row['masses']:7.0f} "
-              f"{row['springs']:8.0f} {row['s_per_sim_s']:15.3f} {ratio:6.2f} "
-              f"{row['spring_steps_per_s']:15.3g}")  # fmt: skip
+        print(
+            f"{'x'.join(map(str, shape)):10} {row['decode_ms']:9.2f} {row['masses']:7.0f} "
+            f"{row['springs']:8.0f} {row['s_per_sim_s']:15.3f} {ratio:6.2f} "
+            f"{row['spring_steps_per_s']:15.3g}"
+        )
 
 
 if __name__ == "__main__":

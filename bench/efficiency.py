@@ -62,8 +62,17 @@ from softevo.core.robots.robot_file import parse_robot, robot_to_json
 from softevo.core.search.evolution import Evolution
 from softevo.local_service import service_env, start_service
 
-BOXES = ([3, 3, 6], [4, 4, 3], [4, 4, 4], [5, 5, 3], [5, 5, 4], [5, 5, 5], [6, 6, 3], [6, 6, 6],
-         [9, 9, 2])  # fmt: skip
+BOXES = (
+    [3, 3, 6],
+    [4, 4, 3],
+    [4, 4, 4],
+    [5, 5, 3],
+    [5, 5, 4],
+    [5, 5, 5],
+    [6, 6, 3],
+    [6, 6, 6],
+    [9, 9, 2],
+)
 SEEDS = (1, 2, 3)
 
 
@@ -294,8 +303,10 @@ def round_trip(files: Files, count: int) -> str:
         alone = timed(lambda: pool.evaluate_batch(halves[0]))
         both = timed(lambda: list(threads.map(pool.evaluate_batch, halves)))
     here = timed(lambda: evaluate_robot_files(halves[0]))
-    return (f"# two robots a call: {here:.2f} ms in this process, {alone:.2f} ms through the "
-            f"pool alone, {both:.2f} ms for two such calls through the pool at once")  # fmt: skip
+    return (
+        f"# two robots a call: {here:.2f} ms in this process, {alone:.2f} ms through the "
+        f"pool alone, {both:.2f} ms for two such calls through the pool at once"
+    )
 
 
 def main() -> None:
@@ -308,15 +319,20 @@ def main() -> None:
         "--no-bound", action="store_true", help="wall times only (to compare two trees)"
     )
     parser.add_argument(
-        "--widths", metavar="ROBOT", nargs="?", const="paper-voxel",
+        "--widths",
+        metavar="ROBOT",
+        nargs="?",
+        const="paper-voxel",
         help="only the kernel's per-robot cost by call width, for PRESET[:SHAPE] robots",
-    )  # fmt: skip
+    )
     args = parser.parse_args()
     if args.widths:
         widths(args.widths)
         return
-    print(f"# {cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
-          f"SOFTEVO_MAX_RUNNING {args.max_running or 'default'}")  # fmt: skip
+    print(
+        f"# {cpu_model()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
+        f"SOFTEVO_MAX_RUNNING {args.max_running or 'default'}"
+    )
     print(
         "workload       path         simulations    wall (s)   bound (s)   bound/wall"
         "   generation bound (s)   bound/generation bound   generation bound/wall"
@@ -329,9 +345,12 @@ def main() -> None:
                     wall, generations = through_run(requests)
                 else:
                     wall, generations = through_service(
-                        requests, name in ("sweep", "seeds"), path == "service-rq", Path(folder),
+                        requests,
+                        name in ("sweep", "seeds"),
+                        path == "service-rq",
+                        Path(folder),
                         args.max_running,
-                    )  # fmt: skip
+                    )
             files = [file for members in generations for file in members]
             physics = math.nan if args.no_bound else bound(files)
             # one run at a time: several runs' generations overlap, so theirs add up to no bound
@@ -340,9 +359,12 @@ def main() -> None:
                 if args.no_bound or len(requests) > 1 or name.startswith("steady")
                 else generation_bound(generations)
             )
-            print(f"{name:14} {path:12} {len(files):11d} {wall:11.1f} {physics:11.1f} "
-                  f"{physics / wall:12.2f} {barrier:22.1f} {physics / barrier:24.2f} "
-                  f"{barrier / wall:23.2f}", flush=True)  # fmt: skip
+            print(
+                f"{name:14} {path:12} {len(files):11d} {wall:11.1f} {physics:11.1f} "
+                f"{physics / wall:12.2f} {barrier:22.1f} {physics / barrier:24.2f} "
+                f"{barrier / wall:23.2f}",
+                flush=True,
+            )
 
 
 if __name__ == "__main__":

@@ -50,8 +50,10 @@ def main() -> None:
     ]
     repeats = 1 if args.quick else 3
 
-    print(f"machine: {os.cpu_count()} cores, {platform.processor() or platform.machine()}, "
-          f"Python {platform.python_version()}")  # fmt: skip
+    print(
+        f"machine: {os.cpu_count()} cores, {platform.processor() or platform.machine()}, "
+        f"Python {platform.python_version()}"
+    )
     print(f"paper-voxel robots: {n_robots} random 4x4x4, {config.sim.n_steps} steps each\n")
     print(f"{'evaluator':<24}{'evaluations/s':>15}{'vs serial':>11}")
     serial_rate, reference = evaluations_per_second(files, SerialEvaluator(), repeats)
@@ -61,8 +63,7 @@ def main() -> None:
             rate, result = evaluations_per_second(files, pool, repeats)
         same = np.array_equal(result, reference, equal_nan=True)
         label = f"pool, {processes} process{'es' if processes > 1 else ''}"
-        print(f"{label:<24}{rate:>15.2f}{rate / serial_rate:>11.2f}"
-              f"   identical to serial: {same}")  # fmt: skip
+        print(f"{label:<24}{rate:>15.2f}{rate / serial_rate:>11.2f}   identical to serial: {same}")
 
     print(f"\nwhole run: paper-voxel 4x4x4, seed 1, {config.generations} generations, pool of 2")
     started = time.perf_counter()

@@ -36,8 +36,13 @@ from softevo.local_service import LocalService, service_env, start_service
 
 POSTGRES = os.environ.get("SOFTEVO_TEST_POSTGRES", "postgresql://postgres@127.0.0.1:5432/test")
 # near the default budget (SOFTEVO_MAX_SPRING_STEPS 1e13): 9.98e12 spring-steps, 670 x 100
-LARGE = {"preset": "paper-voxel", "shape": [8, 8, 8], "population": 670, "generations": 100,
-         "seed": 1}  # fmt: skip
+LARGE = {
+    "preset": "paper-voxel",
+    "shape": [8, 8, 8],
+    "population": 670,
+    "generations": 100,
+    "seed": 1,
+}
 SSE_CLIENTS, REPLAY_CLIENTS = 200, 20
 
 
@@ -72,14 +77,16 @@ async def follow(client: httpx.AsyncClient, run_id: int, stop: asyncio.Event) ->
     return events
 
 
-async def replays(client: httpx.AsyncClient, run_id: int, k: int, stop: asyncio.Event,
-                  answers: Counter[int]) -> None:  # fmt: skip
+async def replays(
+    client: httpx.AsyncClient, run_id: int, k: int, stop: asyncio.Event, answers: Counter[int]
+) -> None:
     fps = (1, 2, 5, 10, 15, 20, 30, 60, 120)[k % 9]
     n = k
     while not stop.is_set():  # the first 100 individuals of the first generation
         try:
-            response = await client.get(f"/runs/{run_id}/individuals/{n}/replay",
-                                        params={"fps": fps}, timeout=120)  # fmt: skip
+            response = await client.get(
+                f"/runs/{run_id}/individuals/{n}/replay", params={"fps": fps}, timeout=120
+            )
             answers[response.status_code] += 1
         except httpx.HTTPError:
             answers[0] += 1
@@ -122,8 +129,10 @@ async def load(local: LocalService, seconds: float, own_process: bool) -> dict[s
         healthz: list[float] = []
         curve: list[float] = []
         tasks = [asyncio.create_task(follow(client, run_id, stop)) for _ in range(SSE_CLIENTS)]
-        tasks += [asyncio.create_task(replays(client, run_id, k, stop, answers))
-                  for k in range(REPLAY_CLIENTS)]  # fmt: skip
+        tasks += [
+            asyncio.create_task(replays(client, run_id, k, stop, answers))
+            for k in range(REPLAY_CLIENTS)
+        ]
         paths = ["/healthz", f"/runs/{run_id}/curve"]
         if own_process:
             times: Queue = multiprocessing.get_context("spawn").Queue()
@@ -146,8 +155,13 @@ async def load(local: LocalService, seconds: float, own_process: bool) -> dict[s
         await asyncio.wait(tasks, timeout=120)
     pool = [peak_kib(pid) for pid in children(local.process.pid) if Path(f"/proc/{pid}").exists()]
     api = peak_kib(local.process.pid) / 1024
-    return {"healthz": healthz, "curve": curve, "answers": answers, "api_mib": api,
-            "pool_mib": [kib / 1024 for kib in pool]}  # fmt: skip
+    return {
+        "healthz": healthz,
+        "curve": curve,
+        "answers": answers,
+        "api_mib": api,
+        "pool_mib": [kib / 1024 for kib in pool],
+    }
 
 
 def p(values: list[float], q: float) -> float:
@@ -159,13 +173,17 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=30.0)
     parser.add_argument("--database", default="sqlite,postgres")
     parser.add_argument(
-        "--probe", choices=["process", "loop"], default="process",
+        "--probe",
+        choices=["process", "loop"],
+        default="process",
         help="time the probes in a process of their own (default) or in the load's event loop",
-    )  # fmt: skip
+    )
     args = parser.parse_args()
     machine = f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
-    print(f"# {machine}, {SSE_CLIENTS} SSE clients, {REPLAY_CLIENTS} replay clients, "
-          f"{args.seconds:g} s, probe in {args.probe}")  # fmt: skip
+    print(
+        f"# {machine}, {SSE_CLIENTS} SSE clients, {REPLAY_CLIENTS} replay clients, "
+        f"{args.seconds:g} s, probe in {args.probe}"
+    )
     for name in args.database.split(","):
         with tempfile.TemporaryDirectory() as folder:
             url = f"sqlite:///{Path(folder) / 'load.db'}"
@@ -176,19 +194,27 @@ def main() -> None:
                 url = scratch.__enter__()
                 Database(url).upgrade()
             try:
-                with start_service(service_env(database_url=url), Path(folder) / "serve.log",
-                                   "--log-level", "warning") as local:  # fmt: skip
+                with start_service(
+                    service_env(database_url=url),
+                    Path(folder) / "serve.log",
+                    "--log-level",
+                    "warning",
+                ) as local:
                     result = asyncio.run(load(local, args.seconds, args.probe == "process"))
             finally:
                 if name == "postgres":
                     scratch.__exit__(None, None, None)
         for probe_name in ("healthz", "curve"):
             values = result[probe_name]
-            print(f"{name:9} {probe_name:8} n={len(values):4}  p50 {p(values, 50):7.1f} ms  "
-                  f"p99 {p(values, 99):7.1f} ms  max {max(values, default=0):7.1f} ms")  # fmt: skip
+            print(
+                f"{name:9} {probe_name:8} n={len(values):4}  p50 {p(values, 50):7.1f} ms  "
+                f"p99 {p(values, 99):7.1f} ms  max {max(values, default=0):7.1f} ms"
+            )
         print(f"{name:9} replays  answers {dict(result['answers'])}")
-        print(f"{name:9} memory   API process peak {result['api_mib']:.0f} MiB, pool processes "
-              f"{', '.join(f'{m:.0f}' for m in result['pool_mib'])} MiB")  # fmt: skip
+        print(
+            f"{name:9} memory   API process peak {result['api_mib']:.0f} MiB, pool processes "
+            f"{', '.join(f'{m:.0f}' for m in result['pool_mib'])} MiB"
+        )
 
 
 if __name__ == "__main__":

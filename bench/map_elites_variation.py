@@ -22,9 +22,13 @@ from typing import Any
 from softevo import library
 
 BASE: dict[str, Any] = {
-    "preset": "paper-voxel", "algorithm": "map-elites", "descriptors": ["voxels", "actuated"],
-    "bins": [8, 8], "shape": [4, 4, 4], "generations": 80,
-}  # fmt: skip
+    "preset": "paper-voxel",
+    "algorithm": "map-elites",
+    "descriptors": ["voxels", "actuated"],
+    "bins": [8, 8],
+    "shape": [4, 4, 4],
+    "generations": 80,
+}
 MUTATION = {"variation": "mutation"}
 VARIANTS: dict[str, dict[str, Any]] = {
     "today": {},
@@ -67,11 +71,16 @@ def measure(name: str, seed: int, out: Path) -> dict[str, Any]:
     result = library.evolve(config, workers=1)
     archive = result.archive or {"elites": []}
     row = {
-        "variant": name, "seed": seed, "coverage": result.curve[-1]["coverage"],
-        "qd_score": result.curve[-1]["qd_score"], "best": result.best_fitness,
-        "simulations": result.evaluations, "cells": len(archive["elites"]),
-        "wall_s": result.wall_seconds, "config": result.config,
-    }  # fmt: skip
+        "variant": name,
+        "seed": seed,
+        "coverage": result.curve[-1]["coverage"],
+        "qd_score": result.curve[-1]["qd_score"],
+        "best": result.best_fitness,
+        "simulations": result.evaluations,
+        "cells": len(archive["elites"]),
+        "wall_s": result.wall_seconds,
+        "config": result.config,
+    }
     path.write_text(json.dumps(row, indent=1))
     return row
 

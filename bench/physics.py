@@ -60,9 +60,12 @@ def cpu_model() -> str:
 
 def bench_sim(duration: float, terrain: dict | None = None) -> SimSettings:
     return SimSettings.model_validate(
-        {"duration": duration, "settle_time": min(1.0, duration / 2),
-         **({"terrain": terrain} if terrain else {})}
-    )  # fmt: skip
+        {
+            "duration": duration,
+            "settle_time": min(1.0, duration / 2),
+            **({"terrain": terrain} if terrain else {}),
+        }
+    )
 
 
 def solid_block(duration: float, terrain: dict | None = None) -> Mechanics:
@@ -77,8 +80,10 @@ def random_robots(duration: float, terrain: dict | None, count: int) -> list[Mec
     labels = [
         tuple(rng.choice(["hard", "soft", "sine", "neg_sine"], 64).tolist()) for _ in range(count)
     ]
-    return [build_mechanics(VoxelRobot((4, 4, 4), voxels, Actuation(0.0, 1.0, 0.0), sim))
-            for voxels in labels]  # fmt: skip
+    return [
+        build_mechanics(VoxelRobot((4, 4, 4), voxels, Actuation(0.0, 1.0, 0.0), sim))
+        for voxels in labels
+    ]
 
 
 def terrain_rates(
@@ -231,11 +236,15 @@ def main() -> None:
     mech = solid_block(duration)
     n_springs, n_steps = mech.n_springs, mech.sim.n_steps
     batch = [mech] * n_batch
-    print(f"machine: {os.cpu_count()} cores, {cpu_model()}; Python {platform.python_version()}, "
-          f"numba {numba.__version__}, NumPy {np.__version__}")  # fmt: skip
-    print(f"robot: solid 4x4x4 hard block, {mech.n_masses} masses, {n_springs} springs, "
-          f"{n_steps} steps (duration {duration:g} s, dt {mech.sim.step:g}); "
-          f"median of {repeats} runs (single robot: {2 * repeats + 1})\n")  # fmt: skip
+    print(
+        f"machine: {os.cpu_count()} cores, {cpu_model()}; Python {platform.python_version()}, "
+        f"numba {numba.__version__}, NumPy {np.__version__}"
+    )
+    print(
+        f"robot: solid 4x4x4 hard block, {mech.n_masses} masses, {n_springs} springs, "
+        f"{n_steps} steps (duration {duration:g} s, dt {mech.sim.step:g}); "
+        f"median of {repeats} runs (single robot: {2 * repeats + 1})\n"
+    )
 
     simulate(mech)  # compile (or load) both kernels before timing
     simulate_batch(batch[:2])
@@ -257,21 +266,25 @@ def main() -> None:
         np_rates[robots] = rate_row(label, n_springs * steps * robots, seconds, 1)
 
     if not args.quick:
-        print(f"\n  simulate_batch, {n_batch} robots, 1 thread, by lanes (DEFAULT_LANES: "
-              "core/physics/simulate.py)")  # fmt: skip
+        print(
+            f"\n  simulate_batch, {n_batch} robots, 1 thread, by lanes (DEFAULT_LANES: "
+            "core/physics/simulate.py)"
+        )
         for lanes in (4, 8, 16, 32):
             seconds = median_seconds(lambda n=lanes: simulate_batch(batch, lanes=n), 3)
             rate_row(f"lanes = {lanes}", one_step * n_batch, seconds, 1)
 
     terrains = terrain_rates(duration, repeats, n_batch)
     moving = terrain_rates(duration, repeats, n_batch, actuated=True)
-    print(f"\n  simulate_batch, {n_batch} robots, 1 thread, on each task's terrain "
-          "(interleaved)")  # fmt: skip
-    print(f"  {'terrain':<20}{'blocks M/s':>12}{'/ flat':>8}{'random actuated M/s':>24}"
-          f"{'/ flat':>8}")  # fmt: skip
+    print(f"\n  simulate_batch, {n_batch} robots, 1 thread, on each task's terrain (interleaved)")
+    print(
+        f"  {'terrain':<20}{'blocks M/s':>12}{'/ flat':>8}{'random actuated M/s':>24}{'/ flat':>8}"
+    )
     for name, rate in terrains.items():
-        print(f"  {name:<20}{rate / 1e6:>12.0f}{rate / terrains['flat']:>8.2f}"
-              f"{moving[name] / 1e6:>24.0f}{moving[name] / moving['flat']:>8.2f}")  # fmt: skip
+        print(
+            f"  {name:<20}{rate / 1e6:>12.0f}{rate / terrains['flat']:>8.2f}"
+            f"{moving[name] / 1e6:>24.0f}{moving[name] / moving['flat']:>8.2f}"
+        )
 
     print("\n  ratios (per core, batch on 1 thread)")
     print(f"  {'numba single / NumPy 1 robot':<44}{single / np_rates[1]:>12.1f}")
@@ -296,8 +309,10 @@ def main() -> None:
         warm = first_call(cache_dir)
     print("\n  first call in a fresh process (s)           import  simulate  batch  cache hit/miss")
     for label, run in (("empty numba cache (compiles)", cold), ("warm cache (loads)", warm)):
-        print(f"  {label:<40}{run['import']:>9.2f}{run['simulate']:>10.2f}"
-              f"{run['simulate_batch']:>7.2f}{run['hits']:>8}/{run['misses']}")  # fmt: skip
+        print(
+            f"  {label:<40}{run['import']:>9.2f}{run['simulate']:>10.2f}"
+            f"{run['simulate_batch']:>7.2f}{run['hits']:>8}/{run['misses']}"
+        )
     print(f"  cache files written: {files.count('.nbi')} index, {files.count('.nbc')} data")
 
     recompiled = warm["misses"] > 0 or warm["hits"] < 2

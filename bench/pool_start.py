@@ -34,8 +34,16 @@ def once(method: str, pools: int) -> list[float]:
 
     if method == "spawn":  # the way before the fork server
         evaluation.pool_context = lambda: multiprocessing.get_context("spawn")  # type: ignore[assignment]
-    run = Evolution.start(resolve({"preset": "quick", "population": 2, "seed": 3,
-                                   "sim": {"duration": 0.2, "settle_time": 0.1}}))  # fmt: skip
+    run = Evolution.start(
+        resolve(
+            {
+                "preset": "quick",
+                "population": 2,
+                "seed": 3,
+                "sim": {"duration": 0.2, "settle_time": 0.1},
+            }
+        )
+    )
     files = [robot_to_json(run.robot(item)) for item in run.individuals()]
     seconds = []
     for _ in range(pools):
@@ -57,9 +65,11 @@ def main() -> None:
     if args.once:
         print(json.dumps(once(args.once, args.pools)))
         return
-    print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python "
-          f"{platform.python_version()}, pools of 2 processes, {args.pools} pools per "
-          f"interpreter, median of {args.repeats} (interleaved)")  # fmt: skip
+    print(
+        f"# {platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python "
+        f"{platform.python_version()}, pools of 2 processes, {args.pools} pools per "
+        f"interpreter, median of {args.repeats} (interleaved)"
+    )
     found: dict[str, list[list[float]]] = {method: [] for method in METHODS}
     for _ in range(args.repeats):
         for method in METHODS:

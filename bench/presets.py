@@ -14,8 +14,10 @@ from softevo.core.search.evolution import Evolution
 
 
 def main() -> None:
-    print(f"{'preset':<12}{'seed':>5}{'best m/s':>10}{'found at':>10}{'best@50':>9}"
-          f"{'sims':>6}{'diversity':>10}")  # fmt: skip
+    print(
+        f"{'preset':<12}{'seed':>5}{'best m/s':>10}{'found at':>10}{'best@50':>9}"
+        f"{'sims':>6}{'diversity':>10}"
+    )
     with PoolEvaluator(2) as pool:
         for preset in ("paper-voxel", "voxel-plus"):
             for seed in (1, 2, 3):
@@ -23,9 +25,12 @@ def main() -> None:
                 evolution.run(pool)
                 curve = evolution.curve()
                 _, speed, generation = evolution.best_robot()
-                print(f"{preset:<12}{seed:>5}{speed:>10.4f}{generation:>10}"
-                      f"{curve[49]['best_so_far']:>9.4f}{evolution.evaluations:>6}"
-                      f"{curve[-1]['diversity']:>10.3f}", flush=True)  # fmt: skip
+                print(
+                    f"{preset:<12}{seed:>5}{speed:>10.4f}{generation:>10}"
+                    f"{curve[49]['best_so_far']:>9.4f}{evolution.evaluations:>6}"
+                    f"{curve[-1]['diversity']:>10.3f}",
+                    flush=True,
+                )
 
 
 if __name__ == "__main__":

@@ -38,40 +38,81 @@ def build(path: Path, individuals: int, population: int) -> None:
     """The store: one completed run, its curve and its individuals, written in chunks."""
     from softevo.api import store
     from softevo.api.db import Database
-    from softevo.api.models import Generation, Individual, Run
+    from softevo.api.models import GenerationRow, IndividualRow, RunRow
     from softevo.core.config import RunConfig
 
     generations = individuals // population
-    config = RunConfig.model_validate({"preset": "quick", "shape": [8, 8, 8], "seed": 1,
-                                       "encoding": "voxel-phase", "population": population,
-                                       "generations": generations})  # fmt: skip
+    config = RunConfig.model_validate(
+        {
+            "preset": "quick",
+            "shape": [8, 8, 8],
+            "seed": 1,
+            "encoding": "voxel-phase",
+            "population": population,
+            "generations": generations,
+        }
+    )
     db = Database(f"sqlite:///{path}")
     db.upgrade()
     run = store.create_run(db, config)
     encoding, rng, now = config.make_encoding(), np.random.default_rng(1), datetime.now(UTC)
     genomes = [encoding.random(rng) for _ in range(min(population, 200))]  # reused: same size
-    with db.write() as session:
+    with db.write_session() as session:
         for generation in range(generations):
             fitness = rng.normal(0.1, 0.05, population)
-            session.execute(insert(Individual), [
-                {"run_id": run.id, "generation": generation, "index": index,
-                 "genome": json.loads(genomes[index % len(genomes)].canonical),
-                 "genome_hash": f"{generation:08d}{index:08d}", "operator": "mutation",
-                 "parents": [index], "status": "evaluated", "fitness": float(fitness[index]),
-                 "eval_seconds": 0.5, "worker": "bench", "evaluated_at": now}
-                for index in range(population)
-            ])  # fmt: skip
-            session.execute(insert(Generation), [
-                {"run_id": run.id, "generation": generation, "best": float(fitness.max()),
-                 "mean": float(fitness.mean()), "median": float(np.median(fitness)),
-                 "min": float(fitness.min()), "std": float(fitness.std()),
-                 "best_so_far": float(fitness.max()), "diversity": 0.5, "size": population,
-                 "failed": 0, "evaluations": population, "saved": 0, "seconds": 1.0,
-                 "committed_at": now}
-            ])  # fmt: skip
-        session.execute(update(Run).where(Run.id == run.id).values(
-            status="completed", generations_done=generations, evaluations=individuals,
-            best_fitness=None, finished_at=now))  # fmt: skip
+            session.execute(
+                insert(IndividualRow),
+                [
+                    {
+                        "run_id": run.id,
+                        "generation": generation,
+                        "index": index,
+                        "genome": json.loads(genomes[index % len(genomes)].canonical),
+                        "genome_hash": f"{generation:08d}{index:08d}",
+                        "operator": "mutation",
+                        "parents": [index],
+                        "status": "evaluated",
+                        "fitness": float(fitness[index]),
+                        "eval_seconds": 0.5,
+                        "worker": "bench",
+                        "evaluated_at": now,
+                    }
+                    for index in range(population)
+                ],
+            )
+            session.execute(
+                insert(GenerationRow),
+                [
+                    {
+                        "run_id": run.id,
+                        "generation": generation,
+                        "best": float(fitness.max()),
+                        "mean": float(fitness.mean()),
+                        "median": float(np.median(fitness)),
+                        "min": float(fitness.min()),
+                        "std": float(fitness.std()),
+                        "best_so_far": float(fitness.max()),
+                        "diversity": 0.5,
+                        "size": population,
+                        "failed": 0,
+                        "evaluations": population,
+                        "saved": 0,
+                        "seconds": 1.0,
+                        "committed_at": now,
+                    }
+                ],
+            )
+        session.execute(
+            update(RunRow)
+            .where(RunRow.id == run.id)
+            .values(
+                status="completed",
+                generations_done=generations,
+                evaluations=individuals,
+                best_fitness=None,
+                finished_at=now,
+            )
+        )
     db.dispose()
 
 
@@ -120,14 +161,26 @@ def main() -> None:
         started = time.perf_counter()
         build(path, args.individuals, args.population)
         size = path.stat().st_size / 2**20
-        print(f"store: {args.individuals} individuals (voxel-phase 8x8x8), {size:.0f} MB, "
-              f"built in {time.perf_counter() - started:.1f} s")  # fmt: skip
+        print(
+            f"store: {args.individuals} individuals (voxel-phase 8x8x8), {size:.0f} MB, "
+            f"built in {time.perf_counter() - started:.1f} s"
+        )
         print(f"{'route':40} {'ms (median)':>12} {'MB added (max)':>15}")
         for route in ROUTES:
             out = subprocess.run(
-                [sys.executable, __file__, "--repeat", str(args.repeat), "--measure", str(path),
-                 route], capture_output=True, text=True, check=True,
-            ).stdout  # fmt: skip
+                [
+                    sys.executable,
+                    __file__,
+                    "--repeat",
+                    str(args.repeat),
+                    "--measure",
+                    str(path),
+                    route,
+                ],
+                capture_output=True,
+                text=True,
+                check=True,
+            ).stdout
             figures = json.loads(out.strip().splitlines()[-1])
             print(f"{route:40} {figures['ms']:12.0f} {figures['mb']:15.1f}")
 

@@ -381,9 +381,11 @@ def main() -> None:
     )
     forked = fork_cost(tiny)  # before any thread or subprocess of ours exists
 
-    print(f"machine: {os.cpu_count()} cores, {cpu_model()}, load {os.getloadavg()[0]:.2f}, "
-          f"Python {platform.python_version()}, rq {rq.__version__}, "
-          f"redis-server {redis_version()}")  # fmt: skip
+    print(
+        f"machine: {os.cpu_count()} cores, {cpu_model()}, load {os.getloadavg()[0]:.2f}, "
+        f"Python {platform.python_version()}, rq {rq.__version__}, "
+        f"redis-server {redis_version()}"
+    )
     print(
         f"streams: {args.robots} robots per stream (generation 0 of seed 1, cycled), "
         f"median of {args.repeats}; up to 64 batches in flight on RQ, n on the local pool"
@@ -405,16 +407,26 @@ def main() -> None:
                 call, files, references[name], 4, args.robots, n, threads, args.repeats, url
             )
             s = streams[kind, name, n, 4]
-            print(f"  {LABELS[kind]:<27}{n} worker{'s' if n > 1 else ' '} {name:<12}"
-                  f"{s.rate:8.1f} eval/s  overhead {s.overhead_ms:6.1f} ms/batch  "
-                  f"other load {s.other:.2f} cores", flush=True)  # fmt: skip
+            print(
+                f"  {LABELS[kind]:<27}{n} worker{'s' if n > 1 else ' '} {name:<12}"
+                f"{s.rate:8.1f} eval/s  overhead {s.overhead_ms:6.1f} ms/batch  "
+                f"other load {s.other:.2f} cores",
+                flush=True,
+            )
         if kind == "fork" and n == 2:
             for batch in BATCH_SIZES:
                 for name, files in robot_sets.items():
                     sweep[name, batch] = run_stream(
-                        call, files, references[name], batch, args.sweep_robots, n, threads,
-                        args.repeats, url,
-                    )  # fmt: skip
+                        call,
+                        files,
+                        references[name],
+                        batch,
+                        args.sweep_robots,
+                        n,
+                        threads,
+                        args.repeats,
+                        url,
+                    )
 
     with tempfile.TemporaryDirectory(prefix="softevo-bench-worker-") as tmp:
         workdir = Path(tmp)
@@ -436,13 +448,19 @@ def main() -> None:
                     workers.stop()
 
     bare, with_job, here, rss = forked
-    print(f"\nfork in a warm process ({rss:.0f} MiB resident, kernels loaded), median of 21: "
-          f"fork + exit + wait {bare:.2f} ms; with the tiny job in the child {with_job:.2f} ms; "
-          f"the tiny job without a fork {here:.2f} ms")  # fmt: skip
-    print(f"\nRound trip of a trivially small batch (1 robot, 20 steps), 1 worker, one at a time, "
-          f"{args.trips} trips")  # fmt: skip
-    print(f"{'kind':<28}{'round trip (ms)':>16}{'compute (ms)':>14}{'overhead (ms)':>15}"
-          f"{'p90 (ms)':>10}")  # fmt: skip
+    print(
+        f"\nfork in a warm process ({rss:.0f} MiB resident, kernels loaded), median of 21: "
+        f"fork + exit + wait {bare:.2f} ms; with the tiny job in the child {with_job:.2f} ms; "
+        f"the tiny job without a fork {here:.2f} ms"
+    )
+    print(
+        f"\nRound trip of a trivially small batch (1 robot, 20 steps), 1 worker, one at a time, "
+        f"{args.trips} trips"
+    )
+    print(
+        f"{'kind':<28}{'round trip (ms)':>16}{'compute (ms)':>14}{'overhead (ms)':>15}"
+        f"{'p90 (ms)':>10}"
+    )
     for kind, (trip, compute, p90, _) in trips.items():
         print(f"{LABELS[kind]:<28}{trip:>16.2f}{compute:>14.2f}{trip - compute:>15.2f}{p90:>10.2f}")
     print("\nRedis commands per job (both sides: enqueue, result, RQ's bookkeeping), same trips")
@@ -454,34 +472,46 @@ def main() -> None:
     for name in robot_sets:
         local = {n: streams.get(("local", name, n, 4)) for n in (1, 2)}
         print(f"\n{name} robots, batches of 4, {args.robots} robots per stream")
-        print(f"{'kind':<28}{'workers':>8}{'eval/s':>9}{'vs local':>9}{'compute/robot':>15}"
-              f"{'overhead/batch':>16}{'efficiency':>11}{'client CPU':>12}"
-              f"{'Redis CPU':>11}{'other':>7}")  # fmt: skip
+        print(
+            f"{'kind':<28}{'workers':>8}{'eval/s':>9}{'vs local':>9}{'compute/robot':>15}"
+            f"{'overhead/batch':>16}{'efficiency':>11}{'client CPU':>12}"
+            f"{'Redis CPU':>11}{'other':>7}"
+        )
         for kind in kinds:
             for n in (1, 2):
                 s = streams[kind, name, n, 4]
                 versus = f"{s.rate / local[n].rate:.3f}" if local[n] else "-"
                 redis = f"{1000 * s.redis_cpu / s.batches:.2f} ms" if kind != "local" else "-"
-                print(f"{LABELS[kind]:<28}{n:>8}{s.rate:>9.1f}{versus:>9}"
-                      f"{s.compute_ms_per_robot:>12.1f} ms{s.overhead_ms:>13.1f} ms"
-                      f"{s.efficiency:>11.1%}{1000 * s.client_cpu / s.batches:>9.2f} ms"
-                      f"{redis:>11}{s.other:>7.2f}")  # fmt: skip
+                print(
+                    f"{LABELS[kind]:<28}{n:>8}{s.rate:>9.1f}{versus:>9}"
+                    f"{s.compute_ms_per_robot:>12.1f} ms{s.overhead_ms:>13.1f} ms"
+                    f"{s.efficiency:>11.1%}{1000 * s.client_cpu / s.batches:>9.2f} ms"
+                    f"{redis:>11}{s.other:>7.2f}"
+                )
 
     if "fork" in kinds:
         for name in robot_sets:
-            print(f"\nBatch size, RQ Worker (fork), 2 workers, {name} robots, "
-                  f"{args.sweep_robots} robots per stream")  # fmt: skip
-            print(f"{'robots/job':>10}{'jobs':>6}{'eval/s':>9}{'compute/robot':>15}"
-                  f"{'overhead/batch':>16}{'overhead share':>16}{'other':>7}")  # fmt: skip
+            print(
+                f"\nBatch size, RQ Worker (fork), 2 workers, {name} robots, "
+                f"{args.sweep_robots} robots per stream"
+            )
+            print(
+                f"{'robots/job':>10}{'jobs':>6}{'eval/s':>9}{'compute/robot':>15}"
+                f"{'overhead/batch':>16}{'overhead share':>16}{'other':>7}"
+            )
             for batch in BATCH_SIZES:
                 s = sweep[name, batch]
-                print(f"{batch:>10}{s.batches:>6}{s.rate:>9.1f}{s.compute_ms_per_robot:>12.1f} ms"
-                      f"{s.overhead_ms:>13.1f} ms{1 - s.efficiency:>16.1%}"
-                      f"{s.other:>7.2f}")  # fmt: skip
+                print(
+                    f"{batch:>10}{s.batches:>6}{s.rate:>9.1f}{s.compute_ms_per_robot:>12.1f} ms"
+                    f"{s.overhead_ms:>13.1f} ms{1 - s.efficiency:>16.1%}"
+                    f"{s.other:>7.2f}"
+                )
 
     every = [*streams.values(), *sweep.values()]
-    print(f"\nother load: CPU of processes outside this benchmark, cores, the most in any timed "
-          f"stream: {max(s.other for s in every):.2f} (a quiet machine reads 0.0x)")  # fmt: skip
+    print(
+        f"\nother load: CPU of processes outside this benchmark, cores, the most in any timed "
+        f"stream: {max(s.other for s in every):.2f} (a quiet machine reads 0.0x)"
+    )
 
 
 if __name__ == "__main__":

@@ -28,33 +28,58 @@ from staged import stage
 ROOT = Path(__file__).resolve().parent.parent
 SHORT = {"population": 8, "generations": 4, "seed": 3, "sim": {"duration": 1.5, "settle_time": 0.5}}
 CASES: dict[str, dict[str, Any]] = {
-    **{preset: {"preset": preset, **SHORT} for preset in (
-        "paper-voxel", "voxel-plus", "quick", "map-elites", "task-flat", "task-slope",
-        "task-stairs", "task-rough", "task-hurdles")},
+    **{
+        preset: {"preset": preset, **SHORT}
+        for preset in (
+            "paper-voxel",
+            "voxel-plus",
+            "quick",
+            "map-elites",
+            "task-flat",
+            "task-slope",
+            "task-stairs",
+            "task-rough",
+            "task-hurdles",
+        )
+    },
     "paper-cube": {"preset": "paper-cube", **SHORT, "generations": 6},
     "random": {"preset": "quick", "algorithm": "random", **SHORT},
     "hillclimb": {"preset": "quick", "algorithm": "hillclimb", **SHORT},
     "tournament": {"preset": "quick", "selection": "tournament", **SHORT},
     "roulette": {"preset": "quick", "selection": "roulette", **SHORT},
-    "heading-archive": {"preset": "quick", "algorithm": "map-elites",
-                        "descriptors": ["heading", "voxels"], "bins": [6, 4], **SHORT},
+    "heading-archive": {
+        "preset": "quick",
+        "algorithm": "map-elites",
+        "descriptors": ["heading", "voxels"],
+        "bins": [6, 4],
+        **SHORT,
+    },
     "ga+archive": {"preset": "quick", "descriptors": ["soft", "height"], "bins": [4, 4], **SHORT},
-    "voxel-phase": {"preset": "map-elites", "encoding": "voxel-phase", "shape": [3, 3, 2],
-                    **SHORT},
+    "voxel-phase": {"preset": "map-elites", "encoding": "voxel-phase", "shape": [3, 3, 2], **SHORT},
     # the map-elites preset changed on purpose (issue 38); its old runs are this config
-    "map-elites-old": {"preset": "paper-voxel", "algorithm": "map-elites",
-                       "descriptors": ["voxels", "actuated"], "bins": [8, 8], **SHORT},
+    "map-elites-old": {
+        "preset": "paper-voxel",
+        "algorithm": "map-elites",
+        "descriptors": ["voxels", "actuated"],
+        "bins": [8, 8],
+        **SHORT,
+    },
     "spring": {"preset": "quick", "encoding": "spring", "shape": [2, 2, 2], **SHORT},
     "efficiency": {"preset": "quick", "objective": "efficiency", **SHORT},
     # the strategies of issues 36-38 (skipped for a tree without them: NEWER)
-    "nsga2": {"preset": "quick", "algorithm": "nsga2", "objectives": ["speed", "-energy"],
-              **SHORT},
+    "nsga2": {"preset": "quick", "algorithm": "nsga2", "objectives": ["speed", "-energy"], **SHORT},
     "afpo": {"preset": "quick", "algorithm": "afpo", **SHORT},
     "steady-state": {"preset": "quick", "algorithm": "steady-state", **SHORT},
-    "steady-archive": {"preset": "quick", "algorithm": "steady-state", "descriptors": ["voxels",
-                       "actuated"], "bins": [4, 4], "options": {"parents": "archive"}, **SHORT},
+    "steady-archive": {
+        "preset": "quick",
+        "algorithm": "steady-state",
+        "descriptors": ["voxels", "actuated"],
+        "bins": [4, 4],
+        "options": {"parents": "archive"},
+        **SHORT,
+    },
     "cppn": {"preset": "quick", "encoding": "cppn", "shape": [4, 4, 4], **SHORT},
-}  # fmt: skip
+}
 
 NEWER = {"nsga2", "afpo", "steady-state", "steady-archive", "cppn"}
 
@@ -85,8 +110,12 @@ def run(config: dict[str, Any], path: Path | None) -> dict[str, Any]:
         staged = [str(path), str(Path(__file__).resolve().parent)]
     done = subprocess.run(
         [sys.executable, "-c", ONE, json.dumps(config), *staged],
-        capture_output=True, text=True, env=env, cwd=tempfile.gettempdir(), check=False,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=tempfile.gettempdir(),
+        check=False,
+    )
     if done.returncode != 0:
         raise SystemExit(f"{config}: {done.stderr.strip().splitlines()[-1]}")
     return json.loads(done.stdout.strip().splitlines()[-1])
@@ -133,8 +162,10 @@ def committed_rows(limit: int) -> int:
             found = run(config, None)["last"]["best_so_far"]
             same = f"{found:.6g}" == best
             differences += not same
-            print(f"{row['variant']} {row['shape']} seed {seed}: committed {best}, now "
-                  f"{found:.6g} {'same' if same else 'DIFFERENT'}")  # fmt: skip
+            print(
+                f"{row['variant']} {row['shape']} seed {seed}: committed {best}, now "
+                f"{found:.6g} {'same' if same else 'DIFFERENT'}"
+            )
     return differences
 
 

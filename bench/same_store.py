@@ -20,8 +20,20 @@ from same_results import CASES
 from softevo import library, run_store
 from softevo.core.config import RunConfig, resolve
 
-FIELDS = ("config", "curve", "best", "best_fitness", "best_generation", "state", "archive",
-          "evaluations", "saved", "measures", "best_measures", "front")  # fmt: skip
+FIELDS = (
+    "config",
+    "curve",
+    "best",
+    "best_fitness",
+    "best_generation",
+    "state",
+    "archive",
+    "evaluations",
+    "saved",
+    "measures",
+    "best_measures",
+    "front",
+)
 #: steady-state with a window of two populations, besides same_results' cases
 EXTRA = {"steady-window": {**CASES["steady-state"], "options": {"window": 16}}}
 

@@ -136,10 +136,15 @@ def workers(url: str, count: int, workdir: Path, per_voxel: dict[int, float]) ->
         with (workdir / "workers.log").open("w") as log:
             for i in range(count):
                 command = [sys.executable, "-c", WORKER, url, f"stand-in-{i + 1}"]
-                processes.append(subprocess.Popen(
-                    [*command, scaling_job.FUNCTION], stdout=log, stderr=subprocess.STDOUT,
-                    env=env, start_new_session=True,
-                ))  # fmt: skip
+                processes.append(
+                    subprocess.Popen(
+                        [*command, scaling_job.FUNCTION],
+                        stdout=log,
+                        stderr=subprocess.STDOUT,
+                        env=env,
+                        start_new_session=True,
+                    )
+                )
         connection, deadline = connect(url), time.monotonic() + 180
         while Worker.count(connection=connection) < count:
             if any(p.poll() is not None for p in processes) or time.monotonic() > deadline:
@@ -200,8 +205,14 @@ HEADER = (
 
 def request(args: argparse.Namespace, algorithm: str, window: int | None) -> dict[str, Any]:
     extra = {} if window is None else {"options": {"window": window}}
-    return {"preset": "paper-voxel", "seed": 1, "population": args.population,
-            "generations": args.generations, "algorithm": algorithm, **extra}  # fmt: skip
+    return {
+        "preset": "paper-voxel",
+        "seed": 1,
+        "population": args.population,
+        "generations": args.generations,
+        "algorithm": algorithm,
+        **extra,
+    }
 
 
 @contextlib.contextmanager
@@ -220,8 +231,14 @@ def database(kind: str, folder: Path, name: str) -> Iterator[Database]:
             db.dispose()
 
 
-def drive(db: Database, url: str, run_request: dict[str, Any], batch_size: int,
-          pids: list[int], label: str) -> Figures:  # fmt: skip
+def drive(
+    db: Database,
+    url: str,
+    run_request: dict[str, Any],
+    batch_size: int,
+    pids: list[int],
+    label: str,
+) -> Figures:
     """One run to completion through a fresh coordinator, measured (see the module)."""
     config = resolve(run_request)
     run = store.create_run(db, config)
@@ -241,12 +258,25 @@ def drive(db: Database, url: str, run_request: dict[str, Any], batch_size: int,
         raise SystemExit(f"{label}: the run ended {record.status}: {record.error}")
     spans = evaluator.spans
     return Figures(
-        label, config.population * config.generations, evaluator.robots, evaluator.jobs,
-        got["wall"], evaluator.busy, mid_busy(spans, got["low"], got["high"], len(pids)),
-        got["empty"], median_gap(spans), got["cpu"], got["driver"], got["batches"],
-        int(got["commands"]), int(got["reads"]), got["redis"], got["workers"], got["other"],
+        label,
+        config.population * config.generations,
+        evaluator.robots,
+        evaluator.jobs,
+        got["wall"],
+        evaluator.busy,
+        mid_busy(spans, got["low"], got["high"], len(pids)),
+        got["empty"],
+        median_gap(spans),
+        got["cpu"],
+        got["driver"],
+        got["batches"],
+        int(got["commands"]),
+        int(got["reads"]),
+        got["redis"],
+        got["workers"],
+        got["other"],
         record.best_fitness,
-    )  # fmt: skip
+    )
 
 
 def main() -> None:
@@ -271,16 +301,21 @@ def main() -> None:
         per_voxel, mean = measure_model()
     runs = [
         (f"steady-state W={w}", request(args, "steady-state", int(w)))
-        for w in args.windows.split(",") if "steady-state" in args.algorithms.split(",")
-    ] + [("ga", request(args, "ga", None))] * ("ga" in args.algorithms.split(","))  # fmt: skip
+        for w in args.windows.split(",")
+        if "steady-state" in args.algorithms.split(",")
+    ] + [("ga", request(args, "ga", None))] * ("ga" in args.algorithms.split(","))
     load = os.getloadavg()
-    print(f"# {cpu_model()}, {os.cpu_count()} cores, load {load[0]:.2f} {load[1]:.2f} "
-          f"{load[2]:.2f}, Python {platform.python_version()}, rq {rq.__version__}, "
-          f"redis-server {redis_version()}, {args.database}")  # fmt: skip
-    print(f"# paper-voxel 4x4x4 seed 1, population {args.population} x {args.generations}, "
-          f"{args.workers} SimpleWorkers, batches of {args.batch_size}; the stand-in sleeps "
-          + ", ".join(f"{1e3 * per_voxel[w] * mean:.1f}" for w in WIDTHS)
-          + f" ms per robot of {mean:.1f} voxels in a call of 1, 2, 3, 4 robots")  # fmt: skip
+    print(
+        f"# {cpu_model()}, {os.cpu_count()} cores, load {load[0]:.2f} {load[1]:.2f} "
+        f"{load[2]:.2f}, Python {platform.python_version()}, rq {rq.__version__}, "
+        f"redis-server {redis_version()}, {args.database}"
+    )
+    print(
+        f"# paper-voxel 4x4x4 seed 1, population {args.population} x {args.generations}, "
+        f"{args.workers} SimpleWorkers, batches of {args.batch_size}; the stand-in sleeps "
+        + ", ".join(f"{1e3 * per_voxel[w] * mean:.1f}" for w in WIDTHS)
+        + f" ms per robot of {mean:.1f} voxels in a call of 1, 2, 3, 4 robots"
+    )
     print("# busy: simulation / (workers x wall), mid: the same in the wall's middle 80 %;")
     print("# q=0: the share of the middle with no job queued; gap: median ms between a worker's")
     print("# jobs (RQ's work on both sides, the result's push, any wait for a job);")

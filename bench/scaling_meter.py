@@ -43,7 +43,7 @@ def median_gap(spans: list[tuple[str, float, float]]) -> float:
         b[0] - (a[0] + a[1])
         for jobs in by_worker.values()
         for a, b in itertools.pairwise(sorted(jobs))
-    )  # fmt: skip
+    )
     return gaps[len(gaps) // 2] if gaps else math.nan
 
 
@@ -129,13 +129,19 @@ class Meter:
             spent[key] = spent.get(key, 0.0) + seconds - (before[1] if before[0] == name else 0)
         low, high = middle(self.start, self.start + wall)
         return {
-            "wall": wall, "cpu": cpu - spent.get("queue-watch", 0.0),
-            "driver": cpu - sum(spent.values()), "batches": spent.get("batch", 0.0),
+            "wall": wall,
+            "cpu": cpu - spent.get("queue-watch", 0.0),
+            "driver": cpu - sum(spent.values()),
+            "batches": spent.get("batch", 0.0),
             "commands": redis[0] - self.redis[0] - samples,
-            "reads": redis[1] - self.redis[1] - samples - 3, "redis": redis[2] - self.redis[2],
-            "workers": workers, "other": other, "empty": self.watch.empty(low, high),
-            "low": low, "high": high,
-        }  # fmt: skip
+            "reads": redis[1] - self.redis[1] - samples - 3,
+            "redis": redis[2] - self.redis[2],
+            "workers": workers,
+            "other": other,
+            "empty": self.watch.empty(low, high),
+            "low": low,
+            "high": high,
+        }
 
 
 def profile(drive_once: Any, label: str, top: int = 25) -> None:
@@ -150,8 +156,10 @@ def profile(drive_once: Any, label: str, top: int = 25) -> None:
     stats = yappi.get_func_stats()
     total = sum(stat.tsub for stat in stats)
     per_birth = 1e3 * total / figures.births
-    print(f"\n{label}: yappi, CPU clock, every thread: {total:.2f} s of own time "
-          f"({per_birth:.3f} ms per birth; unprofiled figures above)")  # fmt: skip
+    print(
+        f"\n{label}: yappi, CPU clock, every thread: {total:.2f} s of own time "
+        f"({per_birth:.3f} ms per birth; unprofiled figures above)"
+    )
     places: dict[str, float] = {}
     for stat in stats:
         places[place(stat.module)] = places.get(place(stat.module), 0.0) + stat.tsub
@@ -160,13 +168,11 @@ def profile(drive_once: Any, label: str, top: int = 25) -> None:
             print(f"  {seconds / total:6.1%}  {name}")
     print(f"  own time, the top {top} functions:")
     for stat in sorted(stats, key=lambda s: -s.tsub)[:top]:
-        print(f"  {stat.tsub / total:6.1%} {stat.ncall:>8} calls  {place(stat.module)}:"
-              f"{stat.name}")  # fmt: skip
+        print(f"  {stat.tsub / total:6.1%} {stat.ncall:>8} calls  {place(stat.module)}:{stat.name}")
     print("  inclusive time of softevo's functions, the top 25:")
     mine = [stat for stat in stats if "softevo" in place(stat.module)]
     for stat in sorted(mine, key=lambda s: -s.ttot)[:25]:
-        print(f"  {stat.ttot / total:6.1%} {stat.ncall:>8} calls  {place(stat.module)}:"
-              f"{stat.name}")  # fmt: skip
+        print(f"  {stat.ttot / total:6.1%} {stat.ncall:>8} calls  {place(stat.module)}:{stat.name}")
     yappi.clear_stats()
 
 

@@ -408,13 +408,17 @@ def main() -> None:
     )
     batch_size = Settings.from_env(settings).batch_size
 
-    print(f"machine: {os.cpu_count()} cores, {cpu_model()}, load {os.getloadavg()[0]:.2f}, "
-          f"Python {platform.python_version()}, rq {rq.__version__}, "
-          f"redis-server {redis_version()}")  # fmt: skip
+    print(
+        f"machine: {os.cpu_count()} cores, {cpu_model()}, load {os.getloadavg()[0]:.2f}, "
+        f"Python {platform.python_version()}, rq {rq.__version__}, "
+        f"redis-server {redis_version()}"
+    )
     simulated = "10 s" if args.sim_duration is None else f"{args.sim_duration} s"
-    print(f"run: paper-voxel 4x4x4, seed {args.seed}, population {args.population}, "
-          f"{args.generations} generations, {simulated} simulated; {WORKERS} workers on every "
-          f"path; SOFTEVO_BATCH_SIZE {batch_size}; SQLite\n")  # fmt: skip
+    print(
+        f"run: paper-voxel 4x4x4, seed {args.seed}, population {args.population}, "
+        f"{args.generations} generations, {simulated} simulated; {WORKERS} workers on every "
+        f"path; SOFTEVO_BATCH_SIZE {batch_size}; SQLite\n"
+    )
 
     runs: dict[str, list[Result]] = defaultdict(list)
     paths: list[ServicePath | EvolutionPath] = []
@@ -428,13 +432,19 @@ def main() -> None:
                 url = start_redis(processes, f"redis-{worker_class}")
                 start_workers(processes, url, worker_class)
                 database = workdir / f"rq-{worker_class}.db"
-                env = {**settings, "SOFTEVO_DATABASE_URL": f"sqlite:///{database}",
-                       "SOFTEVO_REDIS_URL": url}  # fmt: skip
+                env = {
+                    **settings,
+                    "SOFTEVO_DATABASE_URL": f"sqlite:///{database}",
+                    "SOFTEVO_REDIS_URL": url,
+                }
                 name = f"service + RQ ({worker_class})"
                 paths.append(ServicePath(processes, name, env, database, request, batch_size, url))
             database = workdir / "local.db"
-            env = {**settings, "SOFTEVO_DATABASE_URL": f"sqlite:///{database}",
-                   "SOFTEVO_WORKERS": str(WORKERS)}  # fmt: skip
+            env = {
+                **settings,
+                "SOFTEVO_DATABASE_URL": f"sqlite:///{database}",
+                "SOFTEVO_WORKERS": str(WORKERS),
+            }
             name = "service, local pool"
             paths.append(ServicePath(processes, name, env, database, request, batch_size))
             paths.append(EvolutionPath(request))
@@ -442,9 +452,11 @@ def main() -> None:
                 for path in paths:
                     result = path.run()
                     runs[path.name].append(result)
-                    print(f"  round {round_number}  {path.name:<30}{result.wall:7.2f} s"
-                          f"{result.rate:8.2f} eval/s   other load {result.other:.2f} cores",
-                          flush=True)  # fmt: skip
+                    print(
+                        f"  round {round_number}  {path.name:<30}{result.wall:7.2f} s"
+                        f"{result.rate:8.2f} eval/s   other load {result.other:.2f} cores",
+                        flush=True,
+                    )
         finally:
             for path in paths:
                 path.close()
@@ -454,29 +466,41 @@ def main() -> None:
     results = [sorted(runs[p.name], key=lambda r: r.wall)[(args.repeats - 1) // 2] for p in paths]
     spread = {name: (min(r.rate for r in rs), max(r.rate for r in rs)) for name, rs in runs.items()}
     print(f"\nmedian of {args.repeats} runs per path")
-    print(f"{'path':<30}{'wall (s)':>9}{'evaluations':>12}{'eval/s':>8}{'min-max eval/s':>16}"
-          f"{'generations/s':>15}")  # fmt: skip
+    print(
+        f"{'path':<30}{'wall (s)':>9}{'evaluations':>12}{'eval/s':>8}{'min-max eval/s':>16}"
+        f"{'generations/s':>15}"
+    )
     for r in results:
         low, high = spread[r.name]
-        print(f"{r.name:<30}{r.wall:>9.2f}{r.evaluations:>12}{r.rate:>8.2f}"
-              f"{f'{low:.2f}-{high:.2f}':>16}{args.generations / r.wall:>15.2f}")  # fmt: skip
+        print(
+            f"{r.name:<30}{r.wall:>9.2f}{r.evaluations:>12}{r.rate:>8.2f}"
+            f"{f'{low:.2f}-{high:.2f}':>16}{args.generations / r.wall:>15.2f}"
+        )
     every = [r for rs in runs.values() for r in rs]
-    print(f"other load: CPU of processes outside this benchmark, the most during any timed run: "
-          f"{max(r.other for r in every):.2f} cores (a quiet machine reads 0.0x)")  # fmt: skip
+    print(
+        f"other load: CPU of processes outside this benchmark, the most during any timed run: "
+        f"{max(r.other for r in every):.2f} cores (a quiet machine reads 0.0x)"
+    )
 
     local = next(r for r in results if r.name == "service, local pool")
     plain = results[-1]
     print("\nratio distributed / in-process (target >= 0.90)")
     for r in results:
         if r.name.startswith("service + RQ"):
-            print(f"  {r.name}: {r.rate / local.rate:.3f} of the service's local pool, "
-                  f"{r.rate / plain.rate:.3f} of plain Evolution")  # fmt: skip
+            print(
+                f"  {r.name}: {r.rate / local.rate:.3f} of the service's local pool, "
+                f"{r.rate / plain.rate:.3f} of plain Evolution"
+            )
     print(f"  service, local pool: {local.rate / plain.rate:.3f} of plain Evolution")
 
-    print(f"\nwhere the service's time went ({WORKERS} workers, batches of {batch_size}; "
-          "worker time per batch, ms)")  # fmt: skip
-    print(f"{'path':<30}{'batches':>8}{'compute/robot':>14}{'busy':>7}{'idle':>7}"
-          f"{'= barrier':>10}{'+ overhead':>11}{'+ outside':>10}")  # fmt: skip
+    print(
+        f"\nwhere the service's time went ({WORKERS} workers, batches of {batch_size}; "
+        "worker time per batch, ms)"
+    )
+    print(
+        f"{'path':<30}{'batches':>8}{'compute/robot':>14}{'busy':>7}{'idle':>7}"
+        f"{'= barrier':>10}{'+ overhead':>11}{'+ outside':>10}"
+    )
     for r in results:
         if r.compute is None:
             continue
@@ -485,9 +509,11 @@ def main() -> None:
         barrier = (WORKERS * r.ideal - r.compute) / r.batches * 1000
         overhead = (r.in_generations - r.ideal) * per_batch
         outside = (r.wall - r.in_generations) * per_batch
-        print(f"{r.name:<30}{r.batches:>8}{1000 * r.compute / r.evaluations:>11.1f} ms"
-              f"{r.compute / (WORKERS * r.wall):>7.1%}{idle:>7.1f}{barrier:>10.1f}"
-              f"{overhead:>11.1f}{outside:>10.1f}")  # fmt: skip
+        print(
+            f"{r.name:<30}{r.batches:>8}{1000 * r.compute / r.evaluations:>11.1f} ms"
+            f"{r.compute / (WORKERS * r.wall):>7.1%}{idle:>7.1f}{barrier:>10.1f}"
+            f"{overhead:>11.1f}{outside:>10.1f}"
+        )
     print(
         "  busy = compute / (workers x wall); idle = (workers x wall - compute) / batches; barrier:"
     )
@@ -499,16 +525,20 @@ def main() -> None:
 
     generations = args.generations
     print("\ncost of the service itself, per batch and per generation (CPU of one process, ms)")
-    print(f"{'path':<30}{'API CPU/batch':>14}{'/generation':>12}{'API busy':>9}"
-          f"{'Redis CPU/batch':>16}{'Redis cmds/batch':>17}")  # fmt: skip
+    print(
+        f"{'path':<30}{'API CPU/batch':>14}{'/generation':>12}{'API busy':>9}"
+        f"{'Redis CPU/batch':>16}{'Redis cmds/batch':>17}"
+    )
     for r in results:
         if r.compute is None:
             continue
         redis = f"{1000 * r.redis_cpu / r.batches:.2f}" if r.redis_calls else "-"
         calls = f"{r.redis_calls / r.batches:.1f}" if r.redis_calls else "-"
-        print(f"{r.name:<30}{1000 * r.api_cpu / r.batches:>14.2f}"
-              f"{1000 * r.api_cpu / generations:>12.2f}{r.api_cpu / r.wall:>9.1%}"
-              f"{redis:>16}{calls:>17}")  # fmt: skip
+        print(
+            f"{r.name:<30}{1000 * r.api_cpu / r.batches:>14.2f}"
+            f"{1000 * r.api_cpu / generations:>12.2f}{r.api_cpu / r.wall:>9.1%}"
+            f"{redis:>16}{calls:>17}"
+        )
     print("  API CPU: the `softevo serve` process itself (coordinator, database, enqueueing and,")
     print("  on the local pool, feeding its pool; not the pool processes), polled once a second")
     for r in results:
@@ -525,8 +555,10 @@ def main() -> None:
         f"{plain.evaluations} evaluations, best so far {last['best_so_far']!r} m/s"
     )
     fresh = Counter(row[CURVE_COLUMNS.index("evaluations")] for row in reference[1:])
-    print("new genomes per generation after the first (new genomes: generations): "
-          + ", ".join(f"{n}: {count}" for n, count in sorted(fresh.items())))  # fmt: skip
+    print(
+        "new genomes per generation after the first (new genomes: generations): "
+        + ", ".join(f"{n}: {count}" for n, count in sorted(fresh.items()))
+    )
 
 
 if __name__ == "__main__":

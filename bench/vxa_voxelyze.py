@@ -169,9 +169,13 @@ def voxelyze_run(binary: str, robot: VoxelRobot, measure_voxel: bool) -> Voxelyz
     with tempfile.TemporaryDirectory() as folder:
         (Path(folder) / "robot.vxa").write_bytes(export_robot(robot, "vxa"))
         done = subprocess.run(
-            [binary, "-f", "robot.vxa", "-p"], cwd=folder, capture_output=True, text=True,
-            timeout=600, check=False,
-        )  # fmt: skip
+            [binary, "-f", "robot.vxa", "-p"],
+            cwd=folder,
+            capture_output=True,
+            text=True,
+            timeout=600,
+            check=False,
+        )
         fitness = Path(folder) / "softevo_fitness.xml"
         if not fitness.exists():
             return VoxelyzeOut(False, math.nan, math.nan, None)
@@ -205,8 +209,9 @@ def compare(binary: str, name: str, robot: Robot) -> Row | str:
     if probe is not None:
         voxel = int(np.argmax(build_mechanics(probe).lattice.kept))
         swings = (softevo_run(probe, voxel)[2], voxelyze_run(binary, probe, True).swing)
-    return Row(name, voxels, whole.wrote, distance, whole.distance, softevo_heading,
-               whole.heading, *swings)  # fmt: skip
+    return Row(
+        name, voxels, whole.wrote, distance, whole.distance, softevo_heading, whole.heading, *swings
+    )
 
 
 def _swing_text(swing: Swing | None) -> str:
@@ -238,10 +243,13 @@ def co_designed(crawler: VoxelRobot) -> VoxelRobot:
     rng = np.random.default_rng(40)
     n = len(crawler.voxels)
     return VoxelRobot(
-        crawler.shape, crawler.voxels, crawler.actuation, crawler.sim,
+        crawler.shape,
+        crawler.voxels,
+        crawler.actuation,
+        crawler.sim,
         phases=tuple(rng.uniform(-math.pi, math.pi, n).tolist()),
         amplitudes=tuple(rng.uniform(-math.pi / 2, math.pi / 2, n).tolist()),
-    )  # fmt: skip
+    )
 
 
 def robots(boxes: str, profile: str | None) -> list[tuple[str, Robot]]:

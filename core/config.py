@@ -23,9 +23,16 @@ from softevo.core.search.algorithm import GAConfig
 CubeOption = tuple[float, float, float, float]
 #: The paper's nine bounding boxes (Figure 4a), in its order.
 PAPER_NINE_SHAPES: tuple[tuple[int, int, int], ...] = (
-    (3, 3, 6), (4, 4, 3), (4, 4, 4), (5, 5, 3), (5, 5, 4),
-    (5, 5, 5), (6, 6, 3), (6, 6, 6), (9, 9, 2),
-)  # fmt: skip
+    (3, 3, 6),
+    (4, 4, 3),
+    (4, 4, 4),
+    (5, 5, 3),
+    (5, 5, 4),
+    (5, 5, 5),
+    (6, 6, 3),
+    (6, 6, 6),
+    (9, 9, 2),
+)
 
 
 class ConfigError(ValueError):
@@ -160,16 +167,22 @@ PRESETS.update(task_presets(_PAPER_VOXEL))
 #: the configuration measured best (EXPERIMENTS.md). The preset before issue 38 (uniform random
 #: genomes) is `"preset": "paper-voxel", "algorithm": "map-elites"`, to the last digit.
 PRESETS["map-elites"] = {
-    **_PAPER_VOXEL, "algorithm": "map-elites", "descriptors": ["voxels", "actuated"],
-    "bins": [8, 8], "options": {"random": "spread"},
-}  # fmt: skip
+    **_PAPER_VOXEL,
+    "algorithm": "map-elites",
+    "descriptors": ["voxels", "actuated"],
+    "bins": [8, 8],
+    "options": {"random": "spread"},
+}
 
 #: CPPN bodies in a big box: the paper's GA with NEAT variation (every copy mutated, half the
 #: crossed children), 25 x 40 generations (docs/evolution.md).
 PRESETS["cppn-8x8x8"] = {
-    **_PAPER_VOXEL, "encoding": "cppn", "shape": [8, 8, 8], "generations": 40,
+    **_PAPER_VOXEL,
+    "encoding": "cppn",
+    "shape": [8, 8, 8],
+    "generations": 40,
     "mutation_probability": 0.5,
-}  # fmt: skip
+}
 
 PRESET_DESCRIPTIONS = {
     "paper-cube": "paper phase 2: one cube, 28 springs pick one of 4 [k,b,w,c] options",

@@ -36,8 +36,12 @@ NEEDS_ENERGY = frozenset({"efficiency"})
 
 def objective_label(objective: str) -> str:
     """`forward speed (m/s)`-style axis label."""
-    names = {"speed": "speed", "forward": "forward speed", "climb": "climb rate",
-             "efficiency": "efficiency"}  # fmt: skip
+    names = {
+        "speed": "speed",
+        "forward": "forward speed",
+        "climb": "climb rate",
+        "efficiency": "efficiency",
+    }
     return f"{names[objective]} ({OBJECTIVES[objective][1]})"
 
 

@@ -19,8 +19,11 @@ def main() -> None:
     for ax, (name, (_asks, terrain, objective)) in zip(axes, TASKS.items(), strict=True):
         surface = sim_settings({"terrain": terrain}).terrain.surface(x, np.zeros_like(x))
         ax.fill_between(x, surface, surface.min() - 0.3, color="#8fa3b5")
-        ax.add_patch(plt.Rectangle((0, surface[(x >= 0) & (x <= 4)].max()), 4, 4, fill=False,
-                                   ls="--", color="#d1495b"))  # fmt: skip
+        ax.add_patch(
+            plt.Rectangle(
+                (0, surface[(x >= 0) & (x <= 4)].max()), 4, 4, fill=False, ls="--", color="#d1495b"
+            )
+        )
         ax.set_title(f"{name} ({objective})", fontsize=9, loc="left")
         ax.set_ylim(surface.min() - 0.3, max(4.5, surface.max() + 0.5))
         ax.set_ylabel("z (m)", fontsize=8)

@@ -154,9 +154,10 @@ def _add_export(commands: Any) -> None:
         help="robot file, or a `softevo run` results folder (its best_robot.json)",
     )
     export.add_argument(
-        "--format", choices=FORMATS,
+        "--format",
+        choices=FORMATS,
         help="file format (default: from the suffix of --out)",
-    )  # fmt: skip
+    )
     export.add_argument("--out", required=True, metavar="FILE", help="file to write")
     export.set_defaults(handler=_cmd_export)
 
@@ -222,14 +223,18 @@ def _add_replay(commands: Any) -> None:
     )
     replay.add_argument("--out", required=True, metavar="FILE.gif|FILE.mp4", help="file to write")
     replay.add_argument(
-        "--fps", type=_positive_float, default=12.0,
+        "--fps",
+        type=_positive_float,
+        default=12.0,
         help=f"frames per simulated second (12; {MIN_PICTURE_FPS:g} to {MAX_PICTURE_FPS:g})",
-    )  # fmt: skip
+    )
     replay.add_argument(
-        "--duration", type=_positive_float, metavar="S",
+        "--duration",
+        type=_positive_float,
+        metavar="S",
         help="simulated seconds drawn (default: one actuation period, 2 pi / omega: 6.28 s at "
         f"the paper's 1 rad/s; at least 3, at most {MAX_PICTURE_SECONDS:g})",
-    )  # fmt: skip
+    )
     replay.set_defaults(handler=_cmd_replay)
 
 
@@ -279,9 +284,11 @@ def build_parser() -> argparse.ArgumentParser:
         "--duration", type=_positive_float, metavar="S", help="simulated seconds (overrides sim)"
     )
     simulate.add_argument(
-        "--terrain", type=run_command.terrain_json, metavar="JSON",
+        "--terrain",
+        type=run_command.terrain_json,
+        metavar="JSON",
         help=f"simulate on this ground instead: {run_command.TERRAIN_EXAMPLES}",
-    )  # fmt: skip
+    )
     simulate.add_argument(
         "--trajectory", metavar="OUT.json", help="also write mass positions over time to this file"
     )

@@ -29,9 +29,11 @@ def add_parser(commands: Any) -> None:
     )
     plot.add_argument("run", metavar="RUN_ID_OR_RESULTS_DIR")
     plot.add_argument(
-        "--out", required=True, metavar="FIG.png",
+        "--out",
+        required=True,
+        metavar="FIG.png",
         help="file to write; its suffix picks the format: .png, .pdf or .svg",
-    )  # fmt: skip
+    )
     plot.add_argument("--kind", choices=KINDS, default="all", help="which figure (all)")
     plot.add_argument(
         "--url",

@@ -114,9 +114,14 @@ def write_population(out: Path, rows: Iterable[Any], append: bool = False) -> No
         for generation, index, fitness, operator, record in rows:
             record = record or {}
             writer.writerow(
-                [generation, index, _cell(fitness), operator,
-                 *(_cell(record.get(name)) for name in names)]
-            )  # fmt: skip
+                [
+                    generation,
+                    index,
+                    _cell(fitness),
+                    operator,
+                    *(_cell(record.get(name)) for name in names),
+                ]
+            )
     if not append:
         os.replace(temporary, path)
 
@@ -182,9 +187,14 @@ def write_front(out: Path, individuals: list[dict[str, Any]], specs: Any) -> lis
         for row in rows:
             measures = row["measures"]
             writer.writerow(
-                [row["generation"], row["index"], "" if row["fitness"] is None else row["fitness"],
-                 row["operator"], *("" if measures.get(n) is None else measures[n] for n in names)]
-            )  # fmt: skip
+                [
+                    row["generation"],
+                    row["index"],
+                    "" if row["fitness"] is None else row["fitness"],
+                    row["operator"],
+                    *("" if measures.get(n) is None else measures[n] for n in names),
+                ]
+            )
     return list(rows)
 
 
@@ -202,9 +212,15 @@ def write_archive(out: Path, evolution: Evolution) -> dict[str, Any] | None:
         writer.writerow(["cell", *data["descriptors"], "fitness", "generation", "index", "genome"])
         for elite in archive.ordered():
             writer.writerow(
-                ["-".join(map(str, elite.cell)), *elite.values, elite.fitness, elite.generation,
-                 elite.index, elite.genome.hash]
-            )  # fmt: skip
+                [
+                    "-".join(map(str, elite.cell)),
+                    *elite.values,
+                    elite.fitness,
+                    elite.generation,
+                    elite.index,
+                    elite.genome.hash,
+                ]
+            )
     os.replace(temporary, out / "archive.csv")
     return data
 

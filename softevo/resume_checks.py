@@ -96,26 +96,50 @@ def _check_state_json(state: Any) -> None:
         for i, item in enumerate(items or []):
             _check_individual_json(item, f"state.json: {name}[{i}]")
     fitness = state.get("previous_fitness")
-    _expect(fitness is None or isinstance(fitness, list), "state.json: previous_fitness",
-            "a list", fitness)  # fmt: skip
+    _expect(
+        fitness is None or isinstance(fitness, list),
+        "state.json: previous_fitness",
+        "a list",
+        fitness,
+    )
     for i, value in enumerate(fitness or []):
-        _expect(_is_number(value, nullable=True), f"state.json: previous_fitness[{i}]",
-                "a number or null", value)  # fmt: skip
+        _expect(
+            _is_number(value, nullable=True),
+            f"state.json: previous_fitness[{i}]",
+            "a number or null",
+            value,
+        )
     best = state.get("best")
     if best is not None:
         _expect(isinstance(best, dict), "state.json: best", "an object", best)
         _check_genome_json(best.get("genome"), "state.json: best.genome")
-        _expect(_is_number(best.get("fitness"), nullable=True), "state.json: best.fitness",
-                "a number or null", best.get("fitness"))  # fmt: skip
-        _expect(_is_int(best.get("generation")), "state.json: best.generation", "an integer",
-                best.get("generation"))  # fmt: skip
+        _expect(
+            _is_number(best.get("fitness"), nullable=True),
+            "state.json: best.fitness",
+            "a number or null",
+            best.get("fitness"),
+        )
+        _expect(
+            _is_int(best.get("generation")),
+            "state.json: best.generation",
+            "an integer",
+            best.get("generation"),
+        )
     history = state.get("history", [])
-    _expect(isinstance(history, list) and all(isinstance(h, dict) for h in history),
-            "state.json: history", "a list of objects", history)  # fmt: skip
+    _expect(
+        isinstance(history, list) and all(isinstance(h, dict) for h in history),
+        "state.json: history",
+        "a list of objects",
+        history,
+    )
     archive = state.get("archive")
     if archive:
-        _expect(isinstance(archive, dict) and isinstance(archive.get("elites"), list),
-                "state.json: archive", "an object with elites", archive)  # fmt: skip
+        _expect(
+            isinstance(archive, dict) and isinstance(archive.get("elites"), list),
+            "state.json: archive",
+            "an object with elites",
+            archive,
+        )
         for i, elite in enumerate(archive["elites"]):
             _expect(isinstance(elite, dict), f"state.json: archive.elites[{i}]", "an object", elite)
             _check_genome_json(elite.get("genome"), f"state.json: archive.elites[{i}].genome")
@@ -124,35 +148,64 @@ def _check_state_json(state: Any) -> None:
 def _check_individual_json(item: Any, where: str) -> None:
     _expect(isinstance(item, dict), where, "an object", item)
     _check_genome_json(item.get("genome"), f"{where}.genome")
-    _expect(isinstance(item.get("operator"), str), f"{where}.operator", "a name",
-            item.get("operator"))  # fmt: skip
+    _expect(
+        isinstance(item.get("operator"), str), f"{where}.operator", "a name", item.get("operator")
+    )
     parents = item.get("parents")
-    _expect(isinstance(parents, list) and all(_is_int(p) and p >= 0 for p in parents),
-            f"{where}.parents", "a list of indices", parents)  # fmt: skip
+    _expect(
+        isinstance(parents, list) and all(_is_int(p) and p >= 0 for p in parents),
+        f"{where}.parents",
+        "a list of indices",
+        parents,
+    )
 
 
 def _check_genome_json(genome: Any, where: str) -> None:
     _expect(isinstance(genome, dict), where, "an object", genome)
-    _expect(isinstance(genome.get("encoding"), str), f"{where}.encoding", "a name",
-            genome.get("encoding"))  # fmt: skip
+    _expect(
+        isinstance(genome.get("encoding"), str),
+        f"{where}.encoding",
+        "a name",
+        genome.get("encoding"),
+    )
     discrete, real = genome.get("discrete"), genome.get("real", [])
-    _expect(isinstance(discrete, list) and all(_is_int(g) for g in discrete),
-            f"{where}.discrete", "a list of integers", discrete)  # fmt: skip
-    _expect(isinstance(real, list) and all(_is_number(g) for g in real),
-            f"{where}.real", "a list of finite numbers", real)  # fmt: skip
+    _expect(
+        isinstance(discrete, list) and all(_is_int(g) for g in discrete),
+        f"{where}.discrete",
+        "a list of integers",
+        discrete,
+    )
+    _expect(
+        isinstance(real, list) and all(_is_number(g) for g in real),
+        f"{where}.real",
+        "a list of finite numbers",
+        real,
+    )
 
 
 def _check_cache_json(cache: Any) -> None:
     _expect(isinstance(cache, dict), "cache.json", "an object", cache)
-    _expect(_is_int(cache.get("generation")), "cache.json: generation", "an integer",
-            cache.get("generation"))  # fmt: skip
-    _expect(_is_number(cache.get("elapsed", 0.0)) and cache.get("elapsed", 0.0) >= 0,
-            "cache.json: elapsed", "seconds, 0 or more", cache.get("elapsed"))  # fmt: skip
+    _expect(
+        _is_int(cache.get("generation")),
+        "cache.json: generation",
+        "an integer",
+        cache.get("generation"),
+    )
+    _expect(
+        _is_number(cache.get("elapsed", 0.0)) and cache.get("elapsed", 0.0) >= 0,
+        "cache.json: elapsed",
+        "seconds, 0 or more",
+        cache.get("elapsed"),
+    )
     fitness = cache.get("fitness")
     _expect(isinstance(fitness, dict), "cache.json: fitness", "an object", fitness)
     for key, value in fitness.items():
-        _expect(_is_number(value, nullable=True), f"cache.json: fitness[{key!r}]",
-                "a number or null", value)  # fmt: skip
+        _expect(
+            _is_number(value, nullable=True),
+            f"cache.json: fitness[{key!r}]",
+            "a number or null",
+            value,
+        )
     for name in ("measures", "heading"):
         records = cache.get(name, {})
         _expect(isinstance(records, dict), f"cache.json: {name}", "an object", records)
@@ -164,8 +217,10 @@ def _check_state(config: RunConfig, state: GAState, raw: dict[str, Any]) -> None
     if state.seed != config.seed:
         raise ResumeError(f"state.json: seed {state.seed}, but config.json's seed is {config.seed}")
     if state.generation > config.generations:
-        raise ResumeError(f"state.json: generation {state.generation} is past the config's "
-                          f"{config.generations} generations")  # fmt: skip
+        raise ResumeError(
+            f"state.json: generation {state.generation} is past the config's "
+            f"{config.generations} generations"
+        )
     if state.generation > 0 and state.previous is None:
         raise ResumeError(f"state.json: previous is null at generation {state.generation}")
     encoding = config.make_encoding()
@@ -177,28 +232,35 @@ def _check_state(config: RunConfig, state: GAState, raw: dict[str, Any]) -> None
         if items is None:
             continue
         if len(items) != size:
-            raise ResumeError(f"state.json: {name} holds {len(items)} individuals, but "
-                              f"config.json's population is {size}")  # fmt: skip
+            raise ResumeError(
+                f"state.json: {name} holds {len(items)} individuals, but "
+                f"config.json's population is {size}"
+            )
         for i, item in enumerate(items):
             _check_genome(encoding, item.genome, f"state.json: {name}[{i}].genome")
             if any(parent >= bound for parent in item.parents):
                 what = f"{bound} births told" if streaming else f"a generation of {size}"
-                raise ResumeError(f"state.json: {name}[{i}].parents: {list(item.parents)} "
-                                  f"indexes past {what}")  # fmt: skip
+                raise ResumeError(
+                    f"state.json: {name}[{i}].parents: {list(item.parents)} indexes past {what}"
+                )
     if streaming:
         _check_births(config, encoding, state)
     fitness = state.previous_fitness
     if state.previous is not None and (fitness is None or len(fitness) != len(state.previous)):
         count = "none" if fitness is None else len(fitness)
-        raise ResumeError(f"state.json: previous_fitness holds {count} values for "
-                          f"{len(state.previous)} individuals")  # fmt: skip
+        raise ResumeError(
+            f"state.json: previous_fitness holds {count} values for "
+            f"{len(state.previous)} individuals"
+        )
     if state.best is not None:
         _check_genome(encoding, state.best[0], "state.json: best.genome")
     if state.archive is not None:
         _check_archive(config, encoding, state)
     if len(raw.get("history", [])) not in (0, state.generation):
-        raise ResumeError(f"state.json: history holds {len(raw['history'])} generations, "
-                          f"the state is at generation {state.generation}")  # fmt: skip
+        raise ResumeError(
+            f"state.json: history holds {len(raw['history'])} generations, "
+            f"the state is at generation {state.generation}"
+        )
 
 
 def _check_births(config: RunConfig, encoding: Encoding, state: GAState) -> None:
@@ -208,21 +270,38 @@ def _check_births(config: RunConfig, encoding: Encoding, state: GAState) -> None
     if state.generation == 0 and kept is None:
         return
     told = config.population * state.generation
-    _expect(isinstance(kept, dict) and kept.get("told") == told, "state.json: data.steady.told",
-            f"{told} (the births of {state.generation} generations)",
-            kept.get("told") if isinstance(kept, dict) else kept)  # fmt: skip
+    _expect(
+        isinstance(kept, dict) and kept.get("told") == told,
+        "state.json: data.steady.told",
+        f"{told} (the births of {state.generation} generations)",
+        kept.get("told") if isinstance(kept, dict) else kept,
+    )
     births = kept.get("births")
-    _expect(isinstance(births, list) and len(births) == len(state.previous or [])
-            and all(_is_int(n) and 0 <= n < told for n in births), "state.json: data.steady.births",
-            f"a birth number below {told} per member", births)  # fmt: skip
+    _expect(
+        isinstance(births, list)
+        and len(births) == len(state.previous or [])
+        and all(_is_int(n) and 0 <= n < told for n in births),
+        "state.json: data.steady.births",
+        f"a birth number below {told} per member",
+        births,
+    )
     window, size = kept.get("window"), window_size(config.options, config.population)
-    _expect(isinstance(window, list) and len(window) == size, "state.json: data.steady.window",
-            f"a list of {size} births (the window)", window)  # fmt: skip
+    _expect(
+        isinstance(window, list) and len(window) == size,
+        "state.json: data.steady.window",
+        f"a list of {size} births (the window)",
+        window,
+    )
     for i, item in enumerate(window):
         where = f"state.json: data.steady.window[{i}]"
-        _expect(isinstance(item, dict) and item.get("n") == told + i
-                and isinstance(item.get("saved"), bool), where,
-                f"birth {told + i} with saved true or false", item)  # fmt: skip
+        _expect(
+            isinstance(item, dict)
+            and item.get("n") == told + i
+            and isinstance(item.get("saved"), bool),
+            where,
+            f"birth {told + i} with saved true or false",
+            item,
+        )
         _check_individual_json(item, where)
         _check_genome(encoding, Individual.from_json(item).genome, f"{where}.genome")
 
@@ -242,9 +321,11 @@ def _check_archive(config: RunConfig, encoding: Encoding, state: GAState) -> Non
     archive = state.archive
     assert archive is not None
     if archive.names != config.descriptors or archive.bins != config.bins:
-        raise ResumeError(f"state.json: archive of {list(archive.names)} x {list(archive.bins)}, "
-                          f"but config.json asks for {list(config.descriptors)} x "
-                          f"{list(config.bins)}")  # fmt: skip
+        raise ResumeError(
+            f"state.json: archive of {list(archive.names)} x {list(archive.bins)}, "
+            f"but config.json asks for {list(config.descriptors)} x "
+            f"{list(config.bins)}"
+        )
     for cell, elite in archive.elites.items():
         where = f"state.json: archive elite {list(cell)}"
         if len(cell) != len(archive.bins) or not all(
@@ -263,7 +344,8 @@ def _check_population_csv(path: Path) -> None:
         with path.open(newline="", encoding="utf-8") as handle:
             for number, row in enumerate(csv.reader(handle)):
                 if number and not (row and row[0].isdigit()):
-                    raise ResumeError(f"population.csv: row {number + 1} does not start with "
-                                      "its generation")  # fmt: skip
+                    raise ResumeError(
+                        f"population.csv: row {number + 1} does not start with its generation"
+                    )
     except (OSError, UnicodeDecodeError, csv.Error) as error:
         raise ResumeError(f"population.csv: cannot read ({error})") from None

@@ -54,43 +54,51 @@ def add_parser(commands: Any) -> None:
     run.add_argument("--preset", choices=sorted(PRESETS), help=f"(quick) {presets}")
     run.add_argument("--shape", metavar="NXxNYxNZ", help="bounding box, e.g. 5x5x3")
     run.add_argument(
-        "--encoding", choices=["voxel", "voxel-phase", "cube-springs", "spring", "cppn"],
+        "--encoding",
+        choices=["voxel", "voxel-phase", "cube-springs", "spring", "cppn"],
         help="voxel-phase: every actuated voxel evolves its own phase and amplitude (co-design); "
         "cppn: a network grows the body, phases and amplitudes (NEAT variation, docs/evolution.md)",
-    )  # fmt: skip
+    )
     run.add_argument("--seed", type=int, help="random seed (0)")
     run.add_argument(
-        "--population", type=int, metavar="P",
+        "--population",
+        type=int,
+        metavar="P",
         help="robots per generation, each simulated once (default: the preset's, 16 for quick, "
         "25 for paper-voxel and the tasks)",
-    )  # fmt: skip
+    )
     run.add_argument(
         "--generations", type=int, metavar="G", help="generations (with --resume: go on to G)"
     )
     run.add_argument("--duration", type=float, metavar="S", help="simulated seconds per robot")
     run.add_argument(
-        "--objective", choices=list(OBJECTIVES),
+        "--objective",
+        choices=list(OBJECTIVES),
         help="fitness: " + "; ".join(f"{k}: {v[0]} ({v[1]})" for k, v in OBJECTIVES.items()),
-    )  # fmt: skip
+    )
     run.add_argument(
-        "--terrain", type=terrain_json, metavar="JSON",
+        "--terrain",
+        type=terrain_json,
+        metavar="JSON",
         help=f"the ground: {TERRAIN_EXAMPLES}; the task-* presets come with theirs",
-    )  # fmt: skip
+    )
     _search_arguments(run)
     run.add_argument(
         "--workers", type=int, metavar="W", help="processes (default: one per core; 1 = serial)"
     )
     run.add_argument(
-        "--out", metavar="DIR",
+        "--out",
+        metavar="DIR",
         help="output folder (softevo-runs/PRESET-SHAPE-ALGORITHM-ENCODING-seedN-HASH); one "
         "holding another config's results is refused",
-    )  # fmt: skip
+    )
     run.add_argument(
-        "--resume", metavar="DIR",
+        "--resume",
+        metavar="DIR",
         help="go on with the stopped run in DIR (its run.db; a folder of a release before "
         "run.db is imported from its config.json, state.json and cache.json), writing there; "
         "only --generations, --workers and --json may be given with it",
-    )  # fmt: skip
+    )
     run.add_argument("--json", action="store_true", help="print the result as JSON at the end")
     run.set_defaults(handler=run_command)
 
@@ -98,7 +106,8 @@ def add_parser(commands: Any) -> None:
 def _search_arguments(run: argparse.ArgumentParser) -> None:
     """The search strategy's flags: algorithm, its options, MAP-Elites' map, the objectives."""
     run.add_argument(
-        "--algorithm", metavar="NAME",
+        "--algorithm",
+        metavar="NAME",
         help="the search strategy: ga (the preset's), random or hillclimb (baselines), "
         "map-elites (quality-diversity over --descriptors, by default the map-elites "
         "preset's voxels,actuated x 8,8: writes archive.csv, archive.json and the archive.png "
@@ -106,18 +115,22 @@ def _search_arguments(run: argparse.ArgumentParser) -> None:
         "barrier: births told in birth order, --options '{\"window\": W}'; W of 2-4 "
         "populations keeps the cores busy where children often repeat a parent), or any other "
         "installed one (softevo algorithms)",
-    )  # fmt: skip
+    )
     run.add_argument(
-        "--options", type=options_json, metavar="JSON",
+        "--options",
+        type=options_json,
+        metavar="JSON",
         help="the strategy's own settings as a JSON object, e.g. '{\"keep\": 2}' "
         "(softevo algorithms lists each strategy's)",
-    )  # fmt: skip
+    )
     run.add_argument(
-        "--descriptors", type=_names, metavar="A,B",
-        help="MAP-Elites descriptors, e.g. voxels,actuated or heading,voxels: " + "; ".join(
-            f"{d.name} [{d.low:g}, {d.high:g}]: {d.help}" for d in CATALOGUE.values())
+        "--descriptors",
+        type=_names,
+        metavar="A,B",
+        help="MAP-Elites descriptors, e.g. voxels,actuated or heading,voxels: "
+        + "; ".join(f"{d.name} [{d.low:g}, {d.high:g}]: {d.help}" for d in CATALOGUE.values())
         + " (heading is measured by the simulation, the others read from the body)",
-    )  # fmt: skip
+    )
     run.add_argument(
         "--bins",
         type=_counts,
@@ -125,17 +138,28 @@ def _search_arguments(run: argparse.ArgumentParser) -> None:
         help="cells along each descriptor, e.g. 10,10 (default: 8 each)",
     )
     run.add_argument(
-        "--objectives", type=_names, metavar="A,-B",
+        "--objectives",
+        type=_names,
+        metavar="A,-B",
         help="several objectives at once, measures of the simulation (a leading - minimises), "
         "e.g. speed,-cost_of_transport, with --algorithm nsga2 or afpo: adds hypervolume and "
         "front_size to the curve, writes front.csv and front.png (docs/evolution.md)",
-    )  # fmt: skip
+    )
 
 
 def _request(args: argparse.Namespace) -> dict[str, Any]:
     request: dict[str, Any] = {"preset": args.preset or "quick", "seed": args.seed or 0}
-    for name in ("shape", "encoding", "population", "generations", "algorithm", "options",
-                 "descriptors", "bins", "objectives"):  # fmt: skip
+    for name in (
+        "shape",
+        "encoding",
+        "population",
+        "generations",
+        "algorithm",
+        "options",
+        "descriptors",
+        "bins",
+        "objectives",
+    ):
         if getattr(args, name) is not None:
             request[name] = getattr(args, name)
     if args.objective is not None:
@@ -255,9 +279,21 @@ def _reason(error: BaseException) -> str:
     return reason(error)
 
 
-_CONFIG_FLAGS = ("preset", "shape", "encoding", "seed", "population", "duration", "objective",
-                 "objectives", "terrain", "algorithm", "options", "descriptors",
-                 "bins")  # fmt: skip
+_CONFIG_FLAGS = (
+    "preset",
+    "shape",
+    "encoding",
+    "seed",
+    "population",
+    "duration",
+    "objective",
+    "objectives",
+    "terrain",
+    "algorithm",
+    "options",
+    "descriptors",
+    "bins",
+)
 
 
 def run_command(args: argparse.Namespace) -> int:

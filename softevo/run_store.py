@@ -296,8 +296,16 @@ def drive(
     folders.take(folder.db, folder.run_id, owner, LEASE_SECONDS, generations)
     evaluator = make_evaluator(workers)
     lease = Lease(owner, LEASE_SECONDS)
-    driving = Driving(folder.db, evaluator, lease, BATCH_SIZE, IN_FLIGHT, SAVE_SECONDS,
-                      threading.Event(), Faults())  # fmt: skip
+    driving = Driving(
+        folder.db,
+        evaluator,
+        lease,
+        BATCH_SIZE,
+        IN_FLIGHT,
+        SAVE_SECONDS,
+        threading.Event(),
+        Faults(),
+    )
     driver = _Driver(driving, folder.run_id, report)
     try:
         driver.drive()

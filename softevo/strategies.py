@@ -17,6 +17,16 @@ from softevo.core.search.strategy import NoOptions, Records, Strategy
 from softevo.core.search.variation import mate, mutant
 
 __all__ = [
-    "GROUP", "GAState", "Individual", "NoOptions", "Records", "Strategy", "StrategyError",
-    "mate", "mutant", "operators", "strategies", "strategy_class",
-]  # fmt: skip
+    "GROUP",
+    "GAState",
+    "Individual",
+    "NoOptions",
+    "Records",
+    "Strategy",
+    "StrategyError",
+    "mate",
+    "mutant",
+    "operators",
+    "strategies",
+    "strategy_class",
+]

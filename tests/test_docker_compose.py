@@ -130,8 +130,11 @@ def test_dockerfile_runs_as_non_root_and_copies_every_package() -> None:
     assert on_lock and on_lock.start() > lock.start(), "the package is not installed on the lock"
     # every folder pyproject.toml installs (a folder left out fails `pip install .` in the image,
     # as docs/ did once `softevo docs` shipped the guides), and the example robots
-    folders = set(tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"][
-        "package-dir"].values()) | {"examples"}  # fmt: skip
+    folders = set(
+        tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"][
+            "package-dir"
+        ].values()
+    ) | {"examples"}
     for folder in sorted(folders):
         assert re.search(rf"^COPY {folder}[ /]", dockerfile, re.M), f"no COPY of {folder}/"
     # The numba cache volume is mounted here: it must exist, owned by the user, in the image.
@@ -253,9 +256,12 @@ def test_every_variable_is_documented_in_env_example() -> None:
     }
     used = variables_used(load_compose())
     assert used == {
-        "POSTGRES_PASSWORD", "REDIS_PASSWORD", "SOFTEVO_API_TOKEN", "SOFTEVO_PROTECT_READS",
+        "POSTGRES_PASSWORD",
+        "REDIS_PASSWORD",
+        "SOFTEVO_API_TOKEN",
+        "SOFTEVO_PROTECT_READS",
         "SOFTEVO_WORKER_CLASS",
-    }  # fmt: skip
+    }
     assert used <= documented, f"missing from .env.example: {used - documented}"
 
 

@@ -258,9 +258,14 @@ def test_dropped_batches_stop_within_seconds_and_the_others_go_on(
     if isinstance(evaluator, RQEvaluator):  # nothing of the dropped run left queued or running
         deadline = time.monotonic() + 10
         while True:
-            left = [job for job in (*evaluator.queue.job_ids,
-                                    *evaluator.queue.started_job_registry.get_job_ids())
-                    if f"runX{run}" in job]  # fmt: skip
+            left = [
+                job
+                for job in (
+                    *evaluator.queue.job_ids,
+                    *evaluator.queue.started_job_registry.get_job_ids(),
+                )
+                if f"runX{run}" in job
+            ]
             if not left or time.monotonic() > deadline:
                 break
             time.sleep(0.2)

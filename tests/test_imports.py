@@ -30,8 +30,10 @@ COMMANDS = [
 def test_help_of_every_command_never_imports_numba() -> None:
     done = subprocess.run(
         [sys.executable, "-P", "-c", HELP_SCRIPT, json.dumps(COMMANDS)],
-        capture_output=True, text=True, timeout=120,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert done.returncode == 0, done.stderr
     loaded = json.loads(done.stdout)
     assert set(loaded) == {" ".join(argv) for argv in COMMANDS}  # every --help ran
@@ -42,6 +44,8 @@ def test_the_check_sees_numba_when_a_command_loads_it() -> None:
     """The same script, with a command that simulates: numba is there (the check can fail)."""
     done = subprocess.run(
         [sys.executable, "-P", "-c", HELP_SCRIPT, json.dumps([["simulate", "missing.json"]])],
-        capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert json.loads(done.stdout) == {"simulate missing.json": ["numba", "llvmlite"]}

@@ -94,9 +94,12 @@ def create_sweep(
     count = len(tasks) * len(shapes) * len(seeds)
     if count > settings.limits.max_sweep_runs:
         sizes = f"{len(tasks)} tasks x " if body.tasks else ""
-        raise RequestError(["seeds"], f"{sizes}{len(shapes)} boxes x {len(seeds)} seeds is over "
-                           f"the limit of {settings.limits.max_sweep_runs} runs per sweep "
-                           "(SOFTEVO_MAX_SWEEP_RUNS)")  # fmt: skip
+        raise RequestError(
+            ["seeds"],
+            f"{sizes}{len(shapes)} boxes x {len(seeds)} seeds is over "
+            f"the limit of {settings.limits.max_sweep_runs} runs per sweep "
+            "(SOFTEVO_MAX_SWEEP_RUNS)",
+        )
     configs = []
     for t, task in enumerate(tasks):
         for i, shape in enumerate(shapes):

@@ -30,8 +30,26 @@ from softevo.api.store.runs import (
 )
 
 __all__ = [
-    "ConflictError", "NotFoundError", "QueueFullError", "RunRecord", "archive", "best_individual",
-    "births", "cancel_run", "create_run", "create_sweep", "curve", "curve_after", "driving",
-    "get_individual", "get_run", "get_sweep", "leases", "list_individuals", "list_runs",
-    "list_sweeps", "population_points", "progress_counts",
-]  # fmt: skip
+    "ConflictError",
+    "NotFoundError",
+    "QueueFullError",
+    "RunRecord",
+    "archive",
+    "best_individual",
+    "births",
+    "cancel_run",
+    "create_run",
+    "create_sweep",
+    "curve",
+    "curve_after",
+    "driving",
+    "get_individual",
+    "get_run",
+    "get_sweep",
+    "leases",
+    "list_individuals",
+    "list_runs",
+    "list_sweeps",
+    "population_points",
+    "progress_counts",
+]

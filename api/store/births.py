@@ -17,12 +17,17 @@ def stored_births(
     hash, fitness (None: not evaluated yet; NaN: failed) and record of measures. A streaming
     strategy's births in flight, read once when a driver takes the run over."""
     columns = INDIVIDUALS.c
-    with db.read() as session:
+    with db.read_session() as session:
         rows = session.execute(
-            select(columns.generation, columns["index"], columns.genome_hash, columns.status,
-                   columns.fitness, columns.measures)
-            .where(columns.run_id == run_id, columns.generation >= since)
-        ).all()  # fmt: skip
+            select(
+                columns.generation,
+                columns["index"],
+                columns.genome_hash,
+                columns.status,
+                columns.fitness,
+                columns.measures,
+            ).where(columns.run_id == run_id, columns.generation >= since)
+        ).all()
     return {
         (row.generation, row.index): (
             row.genome_hash,

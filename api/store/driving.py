@@ -16,7 +16,7 @@ from typing import Any
 from sqlalchemy import Connection, bindparam, insert, select, update
 
 from softevo.api.db import Database, EncodedJSON
-from softevo.api.models import Generation, Individual, Run
+from softevo.api.models import GenerationRow, IndividualRow, RunRow
 from softevo.api.store import leases
 from softevo.api.store.runs import now
 from softevo.api.store.statements import DriverStatement
@@ -24,12 +24,22 @@ from softevo.core.nulls import Record, from_null, from_null_record, record_text,
 from softevo.core.status import IndividualStatus, RunStatus
 
 CURVE_FIELDS = (
-    "generation", "best", "mean", "median", "min", "std", "best_so_far", "diversity", "size",
-    "failed", "evaluations", "saved",
-)  # fmt: skip
+    "generation",
+    "best",
+    "mean",
+    "median",
+    "min",
+    "std",
+    "best_so_far",
+    "diversity",
+    "size",
+    "failed",
+    "evaluations",
+    "saved",
+)
 # Core tables: the driver's statements skip the ORM's per-statement work (they run several times
 # a generation, for every run this process drives).
-INDIVIDUALS, GENERATIONS, RUNS = Individual.__table__, Generation.__table__, Run.__table__
+INDIVIDUALS, GENERATIONS, RUNS = IndividualRow.__table__, GenerationRow.__table__, RunRow.__table__
 _PENDING = IndividualStatus.PENDING.value
 
 
@@ -57,9 +67,9 @@ def _fence(connection: Connection, run_id: int, lease: Lease) -> None:
 def load(db: Database, run_id: int) -> tuple[dict[str, Any], dict[str, Any] | None]:
     """The run's config and the GA state stored with its last committed generation, its
     archive (kept in a column of its own) put back in."""
-    with db.read() as session:
+    with db.read_session() as session:
         row = session.execute(
-            select(Run.config, Run.ga_state, Run.archive).where(Run.id == run_id)
+            select(RunRow.config, RunRow.ga_state, RunRow.archive).where(RunRow.id == run_id)
         ).one()
         if row.ga_state is None or row.archive is None:
             return row.config, row.ga_state
@@ -72,13 +82,18 @@ def known_fitness(
     """Fitness (NaN = failed) of every genome evaluated in generations before `before` (and
     from `since` on, if given), and their records of measures (NaN = not measured; rows upgraded
     from before revision 0004 hold the fitness's measure and the heading), by genome hash."""
-    where = [Individual.run_id == run_id, Individual.generation < before,
-             Individual.status != IndividualStatus.PENDING]  # fmt: skip
+    where = [
+        IndividualRow.run_id == run_id,
+        IndividualRow.generation < before,
+        IndividualRow.status != IndividualStatus.PENDING,
+    ]
     if since is not None:
-        where.append(Individual.generation >= since)
-    with db.read() as session:
+        where.append(IndividualRow.generation >= since)
+    with db.read_session() as session:
         rows = session.execute(
-            select(Individual.genome_hash, Individual.fitness, Individual.measures).where(*where)
+            select(IndividualRow.genome_hash, IndividualRow.fitness, IndividualRow.measures).where(
+                *where
+            )
         ).all()
         fitness = {genome_hash: from_null(value) for genome_hash, value, _ in rows}
         return fitness, {genome_hash: from_null_record(record) for genome_hash, _, record in rows}
@@ -90,14 +105,18 @@ def keep_generation(
     """Insert the generation's members (dicts of genome, genome_hash, operator, parents), once;
     if it was kept before (a takeover), check it is the same and return the fitness and
     records of measures saved (by index)."""
-    with db.writing() as connection:
+    with db.write_connection() as connection:
         _fence(connection, run_id, lease)
         columns = INDIVIDUALS.c
         rows = connection.execute(
-            select(columns["index"], columns.genome_hash, columns.status, columns.fitness,
-                   columns.measures)
-            .where(columns.run_id == run_id, columns.generation == generation)
-        ).all()  # fmt: skip
+            select(
+                columns["index"],
+                columns.genome_hash,
+                columns.status,
+                columns.fitness,
+                columns.measures,
+            ).where(columns.run_id == run_id, columns.generation == generation)
+        ).all()
         if not rows:
             _insert_members(connection, run_id, generation, members)
             return {}, {}
@@ -107,8 +126,11 @@ def keep_generation(
                 f"generation {generation} in the database differs from the one the GA "
                 "regenerated from the run's seed; refusing to mix them"
             )
-        done = [row for row in rows if row.status in (IndividualStatus.EVALUATED,
-                                                      IndividualStatus.FAILED)]  # fmt: skip
+        done = [
+            row
+            for row in rows
+            if row.status in (IndividualStatus.EVALUATED, IndividualStatus.FAILED)
+        ]
         return (
             {row.index: from_null(row.fitness) for row in done},
             {row.index: from_null_record(row.measures) for row in done},
@@ -190,16 +212,27 @@ def _fitness_rows(
     """Rows for `_SET_FITNESS`: evaluated or failed by the value, unless `status` is given."""
     at = now()
     return [
-        {"b_run": run_id, "b_index": index,
-         "b_generation": generation if batch.generation is None else batch.generation,
-         "b_fitness": to_null(value), "b_seconds": to_null(batch.seconds_each),
-         "b_measures": measures_text(batch.measures.get(index)),
-         "b_worker": None if batch.worker is None else batch.worker[:128], "b_at": at,
-         "b_status": (status or (IndividualStatus.EVALUATED if to_null(value) is not None
-                                 else IndividualStatus.FAILED)).value}
+        {
+            "b_run": run_id,
+            "b_index": index,
+            "b_generation": generation if batch.generation is None else batch.generation,
+            "b_fitness": to_null(value),
+            "b_seconds": to_null(batch.seconds_each),
+            "b_measures": measures_text(batch.measures.get(index)),
+            "b_worker": None if batch.worker is None else batch.worker[:128],
+            "b_at": at,
+            "b_status": (
+                status
+                or (
+                    IndividualStatus.EVALUATED
+                    if to_null(value) is not None
+                    else IndividualStatus.FAILED
+                )
+            ).value,
+        }
         for batch in landed
         for index, value in batch.fitness.items()
-    ]  # fmt: skip
+    ]
 
 
 def measures_text(record: Mapping[str, float] | None) -> EncodedJSON:
@@ -236,7 +269,7 @@ def save_fitness(
 ) -> None:
     """Batches' fitness, written once per individual, in one transaction (after the `members`
     a streaming strategy bred since the last write)."""
-    with db.writing() as connection:
+    with db.write_connection() as connection:
         _fence(connection, run_id, lease)
         _insert_births(connection, run_id, members)
         rows = _fitness_rows(run_id, generation, landed)
@@ -257,8 +290,10 @@ _INSERT_MEMBER = DriverStatement(
     insert(INDIVIDUALS)
     .inline()
     .values(
-        run_id=bindparam("b_run"), generation=bindparam("b_generation"),
-        index=bindparam("b_index"), status=_PENDING,
+        run_id=bindparam("b_run"),
+        generation=bindparam("b_generation"),
+        index=bindparam("b_index"),
+        status=_PENDING,
         **{column: bindparam(f"b_{column}") for column in MEMBER_COLUMNS},
     ),
     postgres_rows=f"""
@@ -271,7 +306,7 @@ _INSERT_MEMBER = DriverStatement(
         AS m(b_index, b_genome, b_genome_hash, b_operator, b_parents, n)
     ORDER BY m.n""",
     scalars=("b_run", "b_generation"),
-)  # fmt: skip
+)
 
 
 def _insert_members(
@@ -285,11 +320,15 @@ def _insert_members(
     _INSERT_MEMBER.execute(
         connection,
         [
-            {"b_run": run_id, "b_generation": generation, "b_index": index,
-             **{f"b_{column}": member[column] for column in MEMBER_COLUMNS}}
+            {
+                "b_run": run_id,
+                "b_generation": generation,
+                "b_index": index,
+                **{f"b_{column}": member[column] for column in MEMBER_COLUMNS},
+            }
             for index, member in items
         ],
-    )  # fmt: skip
+    )
 
 
 # The run's row after a generation, precompiled (bound parameters, not literal values: the GA
@@ -312,20 +351,26 @@ _ADVANCE_STATEMENT = (
 _ADVANCE = DriverStatement(_ADVANCE_STATEMENT)
 _FINISH = DriverStatement(
     _ADVANCE_STATEMENT.values(
-        status=RunStatus.COMPLETED.value, finished_at=bindparam("b_at"), lease_owner=None,
+        status=RunStatus.COMPLETED.value,
+        finished_at=bindparam("b_at"),
+        lease_owner=None,
         lease_expires=None,
     )
-)  # fmt: skip
+)
 _INSERT_GENERATION = DriverStatement(
     insert(GENERATIONS)
     .inline()
     .values(
-        run_id=bindparam("b_run"), coverage=bindparam("b_coverage"),
-        qd_score=bindparam("b_qd_score"), hypervolume=bindparam("b_hypervolume"),
-        front_size=bindparam("b_front_size"), seconds=bindparam("b_seconds"),
-        committed_at=bindparam("b_at"), **{key: bindparam(f"b_{key}") for key in CURVE_FIELDS},
+        run_id=bindparam("b_run"),
+        coverage=bindparam("b_coverage"),
+        qd_score=bindparam("b_qd_score"),
+        hypervolume=bindparam("b_hypervolume"),
+        front_size=bindparam("b_front_size"),
+        seconds=bindparam("b_seconds"),
+        committed_at=bindparam("b_at"),
+        **{key: bindparam(f"b_{key}") for key in CURVE_FIELDS},
     )
-)  # fmt: skip
+)
 
 
 def commit_generation(db: Database, run_id: int, lease: Lease, commit: GenerationCommit) -> None:
@@ -334,7 +379,7 @@ def commit_generation(db: Database, run_id: int, lease: Lease, commit: Generatio
     stats = commit.stats
     generation = stats["generation"]
     best = (None, None) if commit.best is None else commit.best
-    with db.writing() as connection:
+    with db.write_connection() as connection:
         _fence(connection, run_id, lease)
         _insert_births(connection, run_id, commit.members)
         rows = _fitness_rows(run_id, generation, commit.landed)
@@ -344,11 +389,19 @@ def commit_generation(db: Database, run_id: int, lease: Lease, commit: Generatio
         at = now()
         _INSERT_GENERATION.execute(
             connection,
-            [{"b_run": run_id, **{f"b_{key}": stats[key] for key in CURVE_FIELDS},
-              "b_coverage": stats.get("coverage"), "b_qd_score": stats.get("qd_score"),
-              "b_hypervolume": stats.get("hypervolume"), "b_front_size": stats.get("front_size"),
-              "b_seconds": commit.seconds, "b_at": at}],
-        )  # fmt: skip
+            [
+                {
+                    "b_run": run_id,
+                    **{f"b_{key}": stats[key] for key in CURVE_FIELDS},
+                    "b_coverage": stats.get("coverage"),
+                    "b_qd_score": stats.get("qd_score"),
+                    "b_hypervolume": stats.get("hypervolume"),
+                    "b_front_size": stats.get("front_size"),
+                    "b_seconds": commit.seconds,
+                    "b_at": at,
+                }
+            ],
+        )
         advance = {
             "b_run": run_id,
             "b_state": commit.state,
@@ -363,17 +416,22 @@ def commit_generation(db: Database, run_id: int, lease: Lease, commit: Generatio
         if commit.done:
             _FINISH.execute(connection, [{**advance, "b_at": at}])
         else:
-            _ADVANCE.execute(connection, [advance])  # fmt: skip
+            _ADVANCE.execute(connection, [advance])
         if not commit.done and commit.upcoming:
             _insert_members(connection, run_id, generation + 1, commit.upcoming)
 
 
 def fail(db: Database, run_id: int, owner: str, message: str) -> None:
     """The run failed for good (a bug, a broken evaluator): say why on it."""
-    with db.write() as session:
+    with db.write_session() as session:
         session.execute(
-            update(Run)
-            .where(Run.id == run_id, Run.lease_owner == owner)
-            .values(status=RunStatus.FAILED.value, error=message[:2000], finished_at=now(),
-                    lease_owner=None, lease_expires=None)
-        )  # fmt: skip
+            update(RunRow)
+            .where(RunRow.id == run_id, RunRow.lease_owner == owner)
+            .values(
+                status=RunStatus.FAILED.value,
+                error=message[:2000],
+                finished_at=now(),
+                lease_owner=None,
+                lease_expires=None,
+            )
+        )

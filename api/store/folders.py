@@ -13,7 +13,7 @@ from typing import Any
 from sqlalchemy import func, insert, inspect, select, update
 
 from softevo.api.db import Database, EncodedJSON
-from softevo.api.models import Generation, Individual, Run
+from softevo.api.models import GenerationRow, IndividualRow, RunRow
 from softevo.api.store.driving import CURVE_FIELDS
 from softevo.api.store.runs import now
 from softevo.core.config import RunConfig
@@ -43,8 +43,8 @@ def checkpoint(db: Database) -> None:
 
 def the_run(db: Database) -> int | None:
     """The id of the folder's run (None: none yet)."""
-    with db.read() as session:
-        return session.scalar(select(func.min(Run.id)))
+    with db.read_session() as session:
+        return session.scalar(select(func.min(RunRow.id)))
 
 
 def take(db: Database, run_id: int, owner: str, seconds: float, generations: int) -> None:
@@ -53,39 +53,44 @@ def take(db: Database, run_id: int, owner: str, seconds: float, generations: int
     takes it stops the first)."""
     config = db_config(db, run_id)
     finished = totals(db, run_id)[0] >= generations
-    with db.write() as session:
+    with db.write_session() as session:
         session.execute(
-            update(Run)
-            .where(Run.id == run_id)
-            .values(status=(RunStatus.COMPLETED if finished else RunStatus.RUNNING).value,
-                    lease_owner=owner,
-                    lease_expires=now().timestamp() + seconds,
-                    config={**config, "generations": generations},
-                    generations_total=generations, error=None,
-                    finished_at=now() if finished else None)
-        )  # fmt: skip
+            update(RunRow)
+            .where(RunRow.id == run_id)
+            .values(
+                status=(RunStatus.COMPLETED if finished else RunStatus.RUNNING).value,
+                lease_owner=owner,
+                lease_expires=now().timestamp() + seconds,
+                config={**config, "generations": generations},
+                generations_total=generations,
+                error=None,
+                finished_at=now() if finished else None,
+            )
+        )
 
 
 def release(db: Database, run_id: int, owner: str) -> None:
     """Give the lease back (stopped or finished): the next `take` finds the run free."""
-    with db.write() as session:
+    with db.write_session() as session:
         session.execute(
-            update(Run).where(Run.id == run_id, Run.lease_owner == owner).values(lease_expires=0.0)
+            update(RunRow)
+            .where(RunRow.id == run_id, RunRow.lease_owner == owner)
+            .values(lease_expires=0.0)
         )
 
 
 def db_config(db: Database, run_id: int) -> dict[str, Any]:
-    with db.read() as session:
-        return dict(session.scalar(select(Run.config).where(Run.id == run_id)))
+    with db.read_session() as session:
+        return dict(session.scalar(select(RunRow.config).where(RunRow.id == run_id)))
 
 
 def totals(db: Database, run_id: int) -> tuple[int, int, int, float]:
     """(generations done, evaluations, saved, compute seconds) of the run."""
-    with db.read() as session:
+    with db.read_session() as session:
         row = session.execute(
-            select(Run.generations_done, Run.evaluations, Run.saved, Run.compute_seconds).where(
-                Run.id == run_id
-            )
+            select(
+                RunRow.generations_done, RunRow.evaluations, RunRow.saved, RunRow.compute_seconds
+            ).where(RunRow.id == run_id)
         ).one()
         return row.generations_done, row.evaluations, row.saved, row.compute_seconds
 
@@ -96,30 +101,43 @@ _OPTIONAL = ("coverage", "qd_score", "hypervolume", "front_size")
 def history(db: Database, run_id: int) -> list[dict[str, Any]]:
     """The committed generations' statistics in order, every field (`GenerationStats.to_json`'s:
     the API's curve leaves some out); a column of a kind the run has not left out."""
-    columns = [getattr(Generation, name) for name in (*CURVE_FIELDS, *_OPTIONAL)]
-    with db.read() as session:
+    columns = [getattr(GenerationRow, name) for name in (*CURVE_FIELDS, *_OPTIONAL)]
+    with db.read_session() as session:
         rows = session.execute(
-            select(*columns).where(Generation.run_id == run_id).order_by(Generation.generation)
+            select(*columns)
+            .where(GenerationRow.run_id == run_id)
+            .order_by(GenerationRow.generation)
         )
         return [
-            {key: value for key, value in row._mapping.items()
-             if value is not None or key not in _OPTIONAL}
+            {
+                key: value
+                for key, value in row._mapping.items()
+                if value is not None or key not in _OPTIONAL
+            }
             for row in rows
-        ]  # fmt: skip
+        ]
 
 
 def population(db: Database, run_id: int, before: int, after: int = -1) -> Iterator[Any]:
     """Rows (generation, index, fitness, operator, measures) of the generations after `after`
     and before `before` (committed ones), in order: population.csv's rows."""
-    columns = (Individual.generation, Individual.index, Individual.fitness, Individual.operator,
-               Individual.measures)  # fmt: skip
-    with db.read() as session:
+    columns = (
+        IndividualRow.generation,
+        IndividualRow.index,
+        IndividualRow.fitness,
+        IndividualRow.operator,
+        IndividualRow.measures,
+    )
+    with db.read_session() as session:
         yield from session.execute(
             select(*columns)
-            .where(Individual.run_id == run_id, Individual.generation > max(after, IMPORTED),
-                   Individual.generation < before)
-            .order_by(Individual.generation, Individual.index)
-        )  # fmt: skip
+            .where(
+                IndividualRow.run_id == run_id,
+                IndividualRow.generation > max(after, IMPORTED),
+                IndividualRow.generation < before,
+            )
+            .order_by(IndividualRow.generation, IndividualRow.index)
+        )
 
 
 def import_run(
@@ -136,41 +154,72 @@ def import_run(
     their genomes are not in the files, so each keeps an empty one and no hash)."""
     history = state.history
     best = state.best
-    with db.write() as session:
-        run = Run(
-            status=RunStatus.RUNNING.value, preset=config.preset, seed=config.seed,
-            config=config.to_json(), generations_done=state.generation,
-            generations_total=config.generations, evaluations=sum(s.evaluations for s in history),
-            saved=sum(s.saved for s in history), compute_seconds=elapsed, created_at=now(),
-            started_at=now(), takeovers=0,
+    with db.write_session() as session:
+        run = RunRow(
+            status=RunStatus.RUNNING.value,
+            preset=config.preset,
+            seed=config.seed,
+            config=config.to_json(),
+            generations_done=state.generation,
+            generations_total=config.generations,
+            evaluations=sum(s.evaluations for s in history),
+            saved=sum(s.saved for s in history),
+            compute_seconds=elapsed,
+            created_at=now(),
+            started_at=now(),
+            takeovers=0,
             ga_state=json.loads(state.to_text(history=False, archive=False)),
             archive=None if state.archive is None else state.archive.to_json(),
             best_fitness=None if best is None else best[1],
             best_generation=None if best is None else best[2],
-        )  # fmt: skip
+        )
         session.add(run)
         session.flush()
         connection = session.connection()
         if history:
             connection.execute(
-                insert(Generation.__table__),
-                [{"run_id": run.id, **{key: row.get(key) for key in (*CURVE_FIELDS, *_OPTIONAL)},
-                  "seconds": 0.0, "committed_at": now()}
-                 for row in (stats.to_json() for stats in history)],
-            )  # fmt: skip
+                insert(GenerationRow.__table__),
+                [
+                    {
+                        "run_id": run.id,
+                        **{key: row.get(key) for key in (*CURVE_FIELDS, *_OPTIONAL)},
+                        "seconds": 0.0,
+                        "committed_at": now(),
+                    }
+                    for row in (stats.to_json() for stats in history)
+                ],
+            )
         fitness, measures = known
-        cached = [(IMPORTED, number, key, fitness[key], "imported", measures.get(key, {}))
-                  for number, key in enumerate(sorted(fitness))]  # fmt: skip
-        listed = [(row["generation"], row["index"], "", row["fitness"], row["operator"],
-                   row["measures"]) for row in rows]  # fmt: skip
+        cached = [
+            (IMPORTED, number, key, fitness[key], "imported", measures.get(key, {}))
+            for number, key in enumerate(sorted(fitness))
+        ]
+        listed = [
+            (row["generation"], row["index"], "", row["fitness"], row["operator"], row["measures"])
+            for row in rows
+        ]
         if cached or listed:
-            connection.execute(insert(Individual.__table__), [
-                {"run_id": run.id, "generation": generation, "index": index,
-                 "genome": EncodedJSON("{}"), "genome_hash": key, "operator": operator[:32],
-                 "parents": EncodedJSON("[]"), "fitness": to_null(value),
-                 "measures": EncodedJSON(record_text(record)), "evaluated_at": now(),
-                 "status": (IndividualStatus.EVALUATED if to_null(value) is not None
-                            else IndividualStatus.FAILED).value}
-                for generation, index, key, value, operator, record in cached + listed
-            ])  # fmt: skip
+            connection.execute(
+                insert(IndividualRow.__table__),
+                [
+                    {
+                        "run_id": run.id,
+                        "generation": generation,
+                        "index": index,
+                        "genome": EncodedJSON("{}"),
+                        "genome_hash": key,
+                        "operator": operator[:32],
+                        "parents": EncodedJSON("[]"),
+                        "fitness": to_null(value),
+                        "measures": EncodedJSON(record_text(record)),
+                        "evaluated_at": now(),
+                        "status": (
+                            IndividualStatus.EVALUATED
+                            if to_null(value) is not None
+                            else IndividualStatus.FAILED
+                        ).value,
+                    }
+                    for generation, index, key, value, operator, record in cached + listed
+                ],
+            )
         return run.id

@@ -9,7 +9,7 @@ from typing import Any
 from sqlalchemy import select, tuple_
 
 from softevo.api.db import Database
-from softevo.api.models import Individual
+from softevo.api.models import IndividualRow
 from softevo.core.status import IndividualStatus
 
 
@@ -17,36 +17,45 @@ def evaluated(db: Database, run_id: int, chunk: int = 4096) -> Iterator[dict[str
     """Every evaluated individual of the run (simulated or from the cache), in (generation,
     index) order, fetched `chunk` rows at a time and never with its genome; a genome met again
     keeps its `genome_hash`, by which `front_rows` counts it once."""
-    with db.read() as session:
+    with db.read_session() as session:
         result = session.execute(
             select(
-                Individual.generation, Individual.index, Individual.fitness,
-                Individual.operator, Individual.measures, Individual.genome_hash,
+                IndividualRow.generation,
+                IndividualRow.index,
+                IndividualRow.fitness,
+                IndividualRow.operator,
+                IndividualRow.measures,
+                IndividualRow.genome_hash,
             )
             .where(
-                Individual.run_id == run_id,
-                Individual.status.in_(
+                IndividualRow.run_id == run_id,
+                IndividualRow.status.in_(
                     [IndividualStatus.EVALUATED.value, IndividualStatus.CACHED.value]
                 ),
             )
-            .order_by(Individual.generation, Individual.index)
+            .order_by(IndividualRow.generation, IndividualRow.index)
             .execution_options(yield_per=chunk)
-        )  # fmt: skip
+        )
         for generation, index, fitness, operator, measures, genome_hash in result:
-            yield {"generation": generation, "index": index, "fitness": fitness,
-                   "operator": operator, "measures": measures or {},
-                   "genome_hash": genome_hash}  # fmt: skip
+            yield {
+                "generation": generation,
+                "index": index,
+                "fitness": fitness,
+                "operator": operator,
+                "measures": measures or {},
+                "genome_hash": genome_hash,
+            }
 
 
 def genomes(db: Database, run_id: int, where: list[tuple[int, int]]) -> dict[tuple[int, int], Any]:
     """The genomes (stored JSON) of the individuals at these (generation, index)."""
     if not where:
         return {}
-    with db.read() as session:
+    with db.read_session() as session:
         result = session.execute(
-            select(Individual.generation, Individual.index, Individual.genome).where(
-                Individual.run_id == run_id,
-                tuple_(Individual.generation, Individual.index).in_(where),
+            select(IndividualRow.generation, IndividualRow.index, IndividualRow.genome).where(
+                IndividualRow.run_id == run_id,
+                tuple_(IndividualRow.generation, IndividualRow.index).in_(where),
             )
         )
         return {(g, i): genome for g, i, genome in result}

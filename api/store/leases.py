@@ -14,7 +14,7 @@ import time
 from sqlalchemy import Connection, bindparam, case, or_, select, update
 
 from softevo.api.db import Database
-from softevo.api.models import Run
+from softevo.api.models import RunRow
 from softevo.api.store.runs import now
 from softevo.api.store.statements import DriverStatement
 from softevo.core.status import RunStatus
@@ -22,15 +22,18 @@ from softevo.core.status import RunStatus
 
 def _orphaned(at: float):  # type: ignore[no-untyped-def]
     return or_(
-        Run.status == RunStatus.QUEUED,
-        (Run.status == RunStatus.RUNNING)
-        & (or_(Run.lease_expires.is_(None), Run.lease_expires < at)),
+        RunRow.status == RunStatus.QUEUED,
+        (RunRow.status == RunStatus.RUNNING)
+        & (or_(RunRow.lease_expires.is_(None), RunRow.lease_expires < at)),
     )
 
 
 # the same predicate as `acquire`'s, its time a bound parameter: compiled once, not per tick
 _CANDIDATES = (
-    select(Run.id).where(_orphaned(bindparam("b_at"))).order_by(Run.id).limit(bindparam("b_limit"))
+    select(RunRow.id)
+    .where(_orphaned(bindparam("b_at")))
+    .order_by(RunRow.id)
+    .limit(bindparam("b_limit"))
 )
 
 
@@ -45,17 +48,18 @@ def candidates(db: Database, limit: int, at: float | None = None) -> list[int]:
 def acquire(db: Database, run_id: int, owner: str, seconds: float, at: float | None = None) -> bool:
     """Take the run if it is queued or its lease has expired (by `at`, unix time; default now)."""
     at = time.time() if at is None else at
-    with db.write() as session:
+    with db.write_session() as session:
         result = session.execute(
-            update(Run)
-            .where(Run.id == run_id, _orphaned(at))
+            update(RunRow)
+            .where(RunRow.id == run_id, _orphaned(at))
             .values(
                 status=RunStatus.RUNNING.value,
                 lease_owner=owner,
                 lease_expires=at + seconds,
-                started_at=case((Run.started_at.is_(None), now()), else_=Run.started_at),
+                started_at=case((RunRow.started_at.is_(None), now()), else_=RunRow.started_at),
                 takeovers=case(
-                    (Run.status == RunStatus.RUNNING, Run.takeovers + 1), else_=Run.takeovers
+                    (RunRow.status == RunStatus.RUNNING, RunRow.takeovers + 1),
+                    else_=RunRow.takeovers,
                 ),
             )
         )
@@ -63,11 +67,11 @@ def acquire(db: Database, run_id: int, owner: str, seconds: float, at: float | N
 
 
 _RENEW = DriverStatement(
-    update(Run.__table__)
+    update(RunRow.__table__)
     .where(
-        Run.__table__.c.id == bindparam("b_run"),
-        Run.__table__.c.lease_owner == bindparam("b_owner"),
-        Run.__table__.c.status == RunStatus.RUNNING.value,
+        RunRow.__table__.c.id == bindparam("b_run"),
+        RunRow.__table__.c.lease_owner == bindparam("b_owner"),
+        RunRow.__table__.c.status == RunStatus.RUNNING.value,
     )
     .values(lease_expires=bindparam("b_expires"))
 )
@@ -81,15 +85,15 @@ def owns(connection: Connection, run_id: int, owner: str, seconds: float) -> boo
 
 
 def renew(db: Database, run_id: int, owner: str, seconds: float) -> bool:
-    with db.writing() as connection:
+    with db.write_connection() as connection:
         return owns(connection, run_id, owner, seconds)
 
 
 def release_all(db: Database, owner: str) -> None:
     """Let every run of `owner` be taken over at once (a clean shutdown)."""
-    with db.write() as session:
+    with db.write_session() as session:
         session.execute(
-            update(Run)
-            .where(Run.lease_owner == owner, Run.status == RunStatus.RUNNING)
+            update(RunRow)
+            .where(RunRow.lease_owner == owner, RunRow.status == RunStatus.RUNNING)
             .values(lease_owner=None, lease_expires=None)
         )

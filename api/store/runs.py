@@ -16,7 +16,7 @@ from sqlalchemy import func, select, update
 from sqlalchemy.orm import defer
 
 from softevo.api.db import Database
-from softevo.api.models import Generation, Individual, Run, Sweep
+from softevo.api.models import GenerationRow, IndividualRow, RunRow, Sweep
 from softevo.core.config import RunConfig
 from softevo.core.nulls import to_null
 from softevo.core.search.stats import CURVE_COLUMNS
@@ -50,7 +50,7 @@ def _make_room(session: Any, wanted: int, max_queued: int | None) -> None:
     if session.get_bind().dialect.name == "postgresql":
         session.execute(select(func.pg_advisory_xact_lock(QUEUE_LOCK)))
     queued = session.scalar(
-        select(func.count()).select_from(Run).where(Run.status == RunStatus.QUEUED)
+        select(func.count()).select_from(RunRow).where(RunRow.status == RunStatus.QUEUED)
     )
     if queued + wanted > max_queued:
         raise QueueFullError(
@@ -83,31 +83,54 @@ class RunRecord:
 
 #: Runs as reads see them: never the GA state (two populations of JSON, only the coordinator's)
 #: nor the archive (read alone by `archive`).
-_RUNS = select(Run).options(defer(Run.ga_state, raiseload=True), defer(Run.archive, raiseload=True))
+_RUNS = select(RunRow).options(
+    defer(RunRow.ga_state, raiseload=True), defer(RunRow.archive, raiseload=True)
+)
 
 
-def _record(row: Run) -> RunRecord:
+def _record(row: RunRow) -> RunRecord:
     return RunRecord(
-        id=row.id, status=row.status, preset=row.preset, seed=row.seed, config=row.config,
-        sweep_id=row.sweep_id, generations_done=row.generations_done,
-        generations_total=row.generations_total, evaluations=row.evaluations, saved=row.saved,
-        best_fitness=row.best_fitness, best_generation=row.best_generation,
-        compute_seconds=row.compute_seconds, error=row.error, created_at=row.created_at,
-        started_at=row.started_at, finished_at=row.finished_at, takeovers=row.takeovers,
-    )  # fmt: skip
+        id=row.id,
+        status=row.status,
+        preset=row.preset,
+        seed=row.seed,
+        config=row.config,
+        sweep_id=row.sweep_id,
+        generations_done=row.generations_done,
+        generations_total=row.generations_total,
+        evaluations=row.evaluations,
+        saved=row.saved,
+        best_fitness=row.best_fitness,
+        best_generation=row.best_generation,
+        compute_seconds=row.compute_seconds,
+        error=row.error,
+        created_at=row.created_at,
+        started_at=row.started_at,
+        finished_at=row.finished_at,
+        takeovers=row.takeovers,
+    )
 
 
-def _new_run(config: RunConfig, sweep_id: int | None = None) -> Run:
-    return Run(
-        sweep_id=sweep_id, status=RunStatus.QUEUED.value, preset=config.preset, seed=config.seed,
-        config=config.to_json(), ga_state=None, generations_done=0,
-        generations_total=config.generations, evaluations=0, saved=0, compute_seconds=0.0,
-        created_at=now(), takeovers=0,
-    )  # fmt: skip
+def _new_run(config: RunConfig, sweep_id: int | None = None) -> RunRow:
+    return RunRow(
+        sweep_id=sweep_id,
+        status=RunStatus.QUEUED.value,
+        preset=config.preset,
+        seed=config.seed,
+        config=config.to_json(),
+        ga_state=None,
+        generations_done=0,
+        generations_total=config.generations,
+        evaluations=0,
+        saved=0,
+        compute_seconds=0.0,
+        created_at=now(),
+        takeovers=0,
+    )
 
 
 def create_run(db: Database, config: RunConfig, max_queued: int | None = None) -> RunRecord:
-    with db.write() as session:
+    with db.write_session() as session:
         _make_room(session, 1, max_queued)
         row = _new_run(config)
         session.add(row)
@@ -119,7 +142,7 @@ def create_sweep(
     db: Database, request: dict[str, Any], configs: list[RunConfig], max_queued: int | None = None
 ) -> tuple[int, list[int]]:
     """One sweep row and its runs, all in one transaction (all queued, or none)."""
-    with db.write() as session:
+    with db.write_session() as session:
         _make_room(session, len(configs), max_queued)
         sweep = Sweep(request=request, created_at=now())
         session.add(sweep)
@@ -131,8 +154,8 @@ def create_sweep(
 
 
 def get_run(db: Database, run_id: int) -> RunRecord:
-    with db.read() as session:
-        row = session.scalar(_RUNS.where(Run.id == run_id))
+    with db.read_session() as session:
+        row = session.scalar(_RUNS.where(RunRow.id == run_id))
         if row is None:
             raise NotFoundError(f"run {run_id} not found")
         return _record(row)
@@ -141,11 +164,11 @@ def get_run(db: Database, run_id: int) -> RunRecord:
 def list_runs(
     db: Database, status: str | None, offset: int, limit: int
 ) -> tuple[list[RunRecord], int]:
-    with db.read() as session:
-        where = [] if status is None else [Run.status == status]
-        total = session.scalar(select(func.count(Run.id)).where(*where)) or 0
+    with db.read_session() as session:
+        where = [] if status is None else [RunRow.status == status]
+        total = session.scalar(select(func.count(RunRow.id)).where(*where)) or 0
         rows = session.scalars(
-            _RUNS.where(*where).order_by(Run.id.desc()).offset(offset).limit(limit)
+            _RUNS.where(*where).order_by(RunRow.id.desc()).offset(offset).limit(limit)
         )
         return [_record(row) for row in rows], total
 
@@ -154,15 +177,19 @@ def cancel_run(db: Database, run_id: int) -> RunRecord:
     """Queued or running -> cancelled, at once; results so far are kept. 409 otherwise. One
     conditional update: a run that completes at the same moment stays completed."""
     active = [status.value for status in ACTIVE]
-    with db.write() as session:
+    with db.write_session() as session:
         changed = session.execute(
-            update(Run)
-            .where(Run.id == run_id, Run.status.in_(active))
-            .values(status=RunStatus.CANCELLED.value, finished_at=now(), lease_owner=None,
-                    lease_expires=None)
-        ).rowcount  # fmt: skip
+            update(RunRow)
+            .where(RunRow.id == run_id, RunRow.status.in_(active))
+            .values(
+                status=RunStatus.CANCELLED.value,
+                finished_at=now(),
+                lease_owner=None,
+                lease_expires=None,
+            )
+        ).rowcount
         if changed != 1:
-            status = session.scalar(select(Run.status).where(Run.id == run_id))
+            status = session.scalar(select(RunRow.status).where(RunRow.id == run_id))
             if status is None:
                 raise NotFoundError(f"run {run_id} not found")
             raise ConflictError(f"run {run_id} is {status}; only queued or running runs cancel")
@@ -171,14 +198,16 @@ def cancel_run(db: Database, run_id: int) -> RunRecord:
 
 def curve(db: Database, run_id: int) -> list[dict[str, Any]]:
     """Committed generations in order, with the columns of `CURVE_COLUMNS`."""
-    with db.read() as session:
+    with db.read_session() as session:
         rows = session.scalars(
-            select(Generation).where(Generation.run_id == run_id).order_by(Generation.generation)
+            select(GenerationRow)
+            .where(GenerationRow.run_id == run_id)
+            .order_by(GenerationRow.generation)
         )
         return [_curve_row(row) for row in rows]
 
 
-def _curve_row(row: Generation) -> dict[str, Any]:
+def _curve_row(row: GenerationRow) -> dict[str, Any]:
     """The row of `CURVE_COLUMNS`, `QD_COLUMNS` for a run with an archive and
     `PARETO_COLUMNS` for one with objectives."""
     data = {column: getattr(row, column) for column in CURVE_COLUMNS}
@@ -191,16 +220,16 @@ def _curve_row(row: Generation) -> dict[str, Any]:
 
 def curve_after(db: Database, run_id: int, after: int) -> list[dict[str, Any]]:
     """The committed generations after `after`, in order (what an event stream has not sent)."""
-    with db.read() as session:
+    with db.read_session() as session:
         rows = session.scalars(
-            select(Generation)
-            .where(Generation.run_id == run_id, Generation.generation > after)
-            .order_by(Generation.generation)
+            select(GenerationRow)
+            .where(GenerationRow.run_id == run_id, GenerationRow.generation > after)
+            .order_by(GenerationRow.generation)
         )
         return [_curve_row(row) for row in rows]
 
 
-def individual_json(row: Individual, population: int) -> dict[str, Any]:
+def individual_json(row: IndividualRow, population: int) -> dict[str, Any]:
     return {
         "id": row.generation * population + row.index,
         "generation": row.generation,
@@ -218,21 +247,21 @@ def individual_json(row: Individual, population: int) -> dict[str, Any]:
 
 #: Individuals as listings see them: never the genome (tens of kB of JSON each; a page of 5000
 #: with them cost 340 MB and 3 s, BENCHMARKS.md "Reads of a large run").
-_LISTED = select(Individual).options(defer(Individual.genome, raiseload=True))
+_LISTED = select(IndividualRow).options(defer(IndividualRow.genome, raiseload=True))
 
 
 def list_individuals(
     db: Database, run: RunRecord, generation: int | None, offset: int, limit: int
 ) -> tuple[list[dict[str, Any]], int]:
     population = run.config["population"]
-    where = [Individual.run_id == run.id]
+    where = [IndividualRow.run_id == run.id]
     if generation is not None:
-        where.append(Individual.generation == generation)
-    with db.read() as session:
-        total = session.scalar(select(func.count(Individual.id)).where(*where)) or 0
+        where.append(IndividualRow.generation == generation)
+    with db.read_session() as session:
+        total = session.scalar(select(func.count(IndividualRow.id)).where(*where)) or 0
         rows = session.scalars(
             _LISTED.where(*where)
-            .order_by(Individual.generation, Individual.index)
+            .order_by(IndividualRow.generation, IndividualRow.index)
             .offset(offset)
             .limit(limit)
         )
@@ -247,15 +276,18 @@ def population_points(db: Database, run_id: int) -> tuple[np.ndarray, np.ndarray
     """Every individual's generation and fitness (NaN: failed or not yet evaluated), in order:
     the dot plot's two columns as arrays (16 bytes an individual), read CHUNK rows at a time,
     never the rows' other columns."""
-    with db.read() as session:
-        size = session.scalar(
-            select(func.count(Individual.id)).where(Individual.run_id == run_id)
-        ) or 0  # fmt: skip
+    with db.read_session() as session:
+        size = (
+            session.scalar(
+                select(func.count(IndividualRow.id)).where(IndividualRow.run_id == run_id)
+            )
+            or 0
+        )
         generations, fitness = np.zeros(size, dtype=np.int64), np.full(size, np.nan)
         result = session.execute(
-            select(Individual.generation, Individual.fitness)
-            .where(Individual.run_id == run_id)
-            .order_by(Individual.generation, Individual.index)
+            select(IndividualRow.generation, IndividualRow.fitness)
+            .where(IndividualRow.run_id == run_id)
+            .order_by(IndividualRow.generation, IndividualRow.index)
             .execution_options(yield_per=CHUNK)
         )
         done = 0
@@ -271,12 +303,12 @@ def get_individual(db: Database, run: RunRecord, number: int) -> dict[str, Any]:
     """Individual `number` = generation * population + index, with its genome."""
     population = run.config["population"]
     generation, index = divmod(number, population)
-    with db.read() as session:
+    with db.read_session() as session:
         row = session.scalar(
-            select(Individual).where(
-                Individual.run_id == run.id,
-                Individual.generation == generation,
-                Individual.index == index,
+            select(IndividualRow).where(
+                IndividualRow.run_id == run.id,
+                IndividualRow.generation == generation,
+                IndividualRow.index == index,
             )
         )
         if row is None:
@@ -285,11 +317,11 @@ def get_individual(db: Database, run: RunRecord, number: int) -> dict[str, Any]:
 
 
 def get_sweep(db: Database, sweep_id: int) -> tuple[dict[str, Any], list[RunRecord]]:
-    with db.read() as session:
+    with db.read_session() as session:
         sweep = session.get(Sweep, sweep_id)
         if sweep is None:
             raise NotFoundError(f"sweep {sweep_id} not found")
-        rows = session.scalars(_RUNS.where(Run.sweep_id == sweep_id).order_by(Run.id))
+        rows = session.scalars(_RUNS.where(RunRow.sweep_id == sweep_id).order_by(RunRow.id))
         return {"id": sweep.id, "request": sweep.request, "created_at": sweep.created_at}, [
             _record(row) for row in rows
         ]
@@ -299,7 +331,7 @@ def list_sweeps(
     db: Database, offset: int, limit: int
 ) -> tuple[list[tuple[dict[str, Any], list[RunRecord]]], int]:
     """Newest first: each sweep and its runs."""
-    with db.read() as session:
+    with db.read_session() as session:
         total = session.scalar(select(func.count(Sweep.id))) or 0
         newest = select(Sweep.id).order_by(Sweep.id.desc())
         ids = list(session.scalars(newest.offset(offset).limit(limit)))
@@ -308,11 +340,11 @@ def list_sweeps(
 
 def progress_counts(db: Database, run_id: int) -> dict[str, int]:
     """Individuals by status (fitness saved so far, also of the generation in progress)."""
-    with db.read() as session:
+    with db.read_session() as session:
         rows = session.execute(
-            select(Individual.status, func.count())
-            .where(Individual.run_id == run_id)
-            .group_by(Individual.status)
+            select(IndividualRow.status, func.count())
+            .where(IndividualRow.run_id == run_id)
+            .group_by(IndividualRow.status)
         )
         return {status: count for status, count in rows}
 
@@ -322,15 +354,15 @@ def best_individual(db: Database, run: RunRecord) -> dict[str, Any] | None:
     best fitness), with its genome; None before a generation is committed."""
     if run.best_generation is None or run.best_fitness is None:
         return None
-    with db.read() as session:
+    with db.read_session() as session:
         row = session.scalar(
-            select(Individual)
+            select(IndividualRow)
             .where(
-                Individual.run_id == run.id,
-                Individual.generation == run.best_generation,
-                Individual.fitness == run.best_fitness,
+                IndividualRow.run_id == run.id,
+                IndividualRow.generation == run.best_generation,
+                IndividualRow.fitness == run.best_fitness,
             )
-            .order_by(Individual.index)
+            .order_by(IndividualRow.index)
             .limit(1)
         )
         if row is None:
@@ -342,5 +374,5 @@ def archive(db: Database, run_id: int) -> dict[str, Any] | None:
     """The run's quality-diversity archive as of its last committed generation
     (`softevo.core.search.archive.Archive.to_json()`), from its own column, never the GA state;
     None before the first commit."""
-    with db.read() as session:
-        return session.scalar(select(Run.archive).where(Run.id == run_id))
+    with db.read_session() as session:
+        return session.scalar(select(RunRow.archive).where(RunRow.id == run_id))

@@ -57,10 +57,13 @@ class _Compiled:
         if any(row[name] != value for row in rows for name, value in shared.items()):
             raise ValueError(f"rows differ in one of {scalars}, which they must share")
         plain = [
-            {name: encode_json(row[name]) if name in self.json_names else row[name]
-             for name in self.names if name in row and name not in shared}
+            {
+                name: encode_json(row[name]) if name in self.json_names else row[name]
+                for name in self.names
+                if name in row and name not in shared
+            }
             for row in rows
-        ]  # fmt: skip
+        ]
         return {**shared, "b_rows": json.dumps(plain, allow_nan=False, default=_iso)}
 
 

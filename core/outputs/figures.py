@@ -137,8 +137,15 @@ def draw_population(
     ok = ~np.isnan(fitness)
     failed = generations[~ok]
     if ok.any():
-        axes.scatter(generations[ok], fitness[ok], s=6, alpha=0.5, color="tab:blue",
-                     label="individual", linewidths=0)  # fmt: skip
+        axes.scatter(
+            generations[ok],
+            fitness[ok],
+            s=6,
+            alpha=0.5,
+            color="tab:blue",
+            label="individual",
+            linewidths=0,
+        )
     if len(failed):
         axes.scatter(
             failed,
@@ -161,9 +168,14 @@ def draw_diversity(axes: Any, rows: Sequence[Row], title: str) -> None:
     axes.set_ylim(bottom=0)
     axes.set_title(title)
     axes.annotate(
-        DIVERSITY_CAPTION, xy=(0, 0), xycoords="axes fraction", xytext=(0, -34),
-        textcoords="offset points", va="top", fontsize=7,
-    )  # fmt: skip
+        DIVERSITY_CAPTION,
+        xy=(0, 0),
+        xycoords="axes fraction",
+        xytext=(0, -34),
+        textcoords="offset points",
+        va="top",
+        fontsize=7,
+    )
 
 
 def _single(draw: Any, data: Sequence[Row], title: str, height: float = 3.4, **how: Any) -> Figure:

@@ -112,8 +112,13 @@ class _Scene:
 
 
 #: The legend's names of the materials (robot-file labels), in this order.
-MATERIAL_NAMES = {"soft": "soft", "hard": "hard", "sine": "actuated (sine)",
-                  "neg_sine": "actuated (-sine)", "filled": "filled"}  # fmt: skip
+MATERIAL_NAMES = {
+    "soft": "soft",
+    "hard": "hard",
+    "sine": "actuated (sine)",
+    "neg_sine": "actuated (-sine)",
+    "filled": "filled",
+}
 
 
 def _legend(labels: np.ndarray, phased: bool) -> list[tuple[str, tuple[float, ...]]]:
@@ -151,10 +156,20 @@ def _draw(scene: _Scene, ax: Any, positions: np.ndarray, clock: str | None) -> N
     if scene.legend and clock is not None:  # a movie's frame (a thumbnail is too small)
         from matplotlib.patches import Patch
 
-        handles = [Patch(facecolor=colour, edgecolor=(0, 0, 0, 0.35), label=name)
-                   for name, colour in scene.legend]  # fmt: skip
-        ax.legend(handles=handles, loc="lower right", fontsize=6, frameon=True, framealpha=0.8,
-                  handlelength=1.0, borderpad=0.4, labelspacing=0.3)  # fmt: skip
+        handles = [
+            Patch(facecolor=colour, edgecolor=(0, 0, 0, 0.35), label=name)
+            for name, colour in scene.legend
+        ]
+        ax.legend(
+            handles=handles,
+            loc="lower right",
+            fontsize=6,
+            frameon=True,
+            framealpha=0.8,
+            handlelength=1.0,
+            borderpad=0.4,
+            labelspacing=0.3,
+        )
 
 
 Polygons = tuple[np.ndarray, np.ndarray]

@@ -86,8 +86,11 @@ def voxel_faces(robot: Robot, lattice: Lattice) -> dict[str, Any]:
     (`softevo.core.outputs.export.mass_faces`), each face's voxel and material ("filled" for robots
     whose springs carry their own): a viewer moves each quad's corners with its masses."""
     faces, voxels, labels = mass_faces(robot, lattice)
-    return {"faces": faces.tolist(), "face_voxels": voxels.tolist(),
-            "face_materials": labels.tolist()}  # fmt: skip
+    return {
+        "faces": faces.tolist(),
+        "face_voxels": voxels.tolist(),
+        "face_materials": labels.tolist(),
+    }
 
 
 #: What a replay reports of its simulation besides speed.

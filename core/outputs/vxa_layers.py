@@ -69,8 +69,9 @@ def voxel_actuation(robot: VoxelRobot, grid: np.ndarray) -> VoxelActuation:
     if sim.omega == 0:
         sign = np.zeros_like(sign)
     active = sign != 0
-    gene = _grid(robot.amplitudes if robot.amplitudes is not None else [genes.b] * n_voxels,
-                 robot.shape)  # fmt: skip
+    gene = _grid(
+        robot.amplitudes if robot.amplitudes is not None else [genes.b] * n_voxels, robot.shape
+    )
     own_phase = _grid(robot.phases if robot.phases is not None else [0.0] * n_voxels, robot.shape)
     amplitude = sim.amplitude_scale * sign * gene
     phase = np.where(active, genes.c + own_phase, 0.0)

@@ -52,9 +52,26 @@ def _integrate(
 
 @njit(inline="always", **JIT)
 def _integrate_terrain(
-    step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, ground_c, friction, damping, dt,
-    kind, tp, contact, near,
-):  # fmt: skip
+    step_factor,
+    x,
+    y,
+    z,
+    vx,
+    vy,
+    vz,
+    fx,
+    fy,
+    fz,
+    ground_k,
+    ground_c,
+    friction,
+    damping,
+    dt,
+    kind,
+    tp,
+    contact,
+    near,
+):
     """`_integrate` on any terrain: the penalty force along the surface normal, Coulomb
     friction against the velocity's part in the tangent plane (`contact` and `near`: scratch
     for `contact_pass`)."""
@@ -85,9 +102,26 @@ def _integrate_terrain(
 
 @njit(inline="always", **JIT)
 def advance(
-    step_factor, x, y, z, vx, vy, vz, fx, fy, fz, ground_k, ground_c, friction, damping, dt,
-    kind, tp, contact, near,
-):  # fmt: skip
+    step_factor,
+    x,
+    y,
+    z,
+    vx,
+    vy,
+    vz,
+    fx,
+    fy,
+    fz,
+    ground_k,
+    ground_c,
+    friction,
+    damping,
+    dt,
+    kind,
+    tp,
+    contact,
+    near,
+):
     """One step's contact and integration for both kernels: the flat ground's original
     arithmetic (`_integrate`, to the last bit) or any other terrain's."""
     if kind == 0:

@@ -64,17 +64,38 @@ from softevo.core.physics.springs import (
 
 @njit(**JIT)
 def simulate_one(
-    x, y, z, vx, vy, vz,  # [M] positions (m), velocities (m/s); updated in place
+    x,
+    y,
+    z,
+    vx,
+    vy,
+    vz,  # [M] positions (m), velocities (m/s); updated in place
     step_factor,  # [M] dt / mass, or 0 for a mass that must not move
-    spring_a, spring_b,  # [S] int64 mass indices (the lattice's order: sorted, a < b)
-    stiffness, rest, amp_sin, amp_cos,  # [S] float64
+    spring_a,
+    spring_b,  # [S] int64 mass indices (the lattice's order: sorted, a < b)
+    stiffness,
+    rest,
+    amp_sin,
+    amp_cos,  # [S] float64
     damp,  # [S] each spring's dashpot over dt (N/m), or [0]: no material damping
-    omega, dt, n_steps, weight, ground_k, ground_c, friction, damping,
-    terrain_kind, terrain,  # softevo.core.robots.terrain.kernel_params
-    settle_step, settle_x, settle_y, settle_z,  # positions copied when step == settle_step
-    record_every, frames,  # frames [F, 3, M]: positions every record_every steps, and the last
+    omega,
+    dt,
+    n_steps,
+    weight,
+    ground_k,
+    ground_c,
+    friction,
+    damping,
+    terrain_kind,
+    terrain,  # softevo.core.robots.terrain.kernel_params
+    settle_step,
+    settle_x,
+    settle_y,
+    settle_z,  # positions copied when step == settle_step
+    record_every,
+    frames,  # frames [F, 3, M]: positions every record_every steps, and the last
     energy,  # [S] actuator work of each spring from settle_step on (J), or [0]: not measured
-):  # fmt: skip
+):
     n_masses = x.shape[0]
     n_springs = spring_a.shape[0]
     fx = np.empty(n_masses)
@@ -214,16 +235,35 @@ def simulate_one(
 
 @njit(**JIT)
 def simulate_many(
-    x, y, z, vx, vy, vz,  # [P, B] positions, velocities of the box's points; updated in place
+    x,
+    y,
+    z,
+    vx,
+    vy,
+    vz,  # [P, B] positions, velocities of the box's points; updated in place
     step_factor,  # [P, B] dt / mass, or 0 for a point the robot lacks
     offsets,  # [D] int64, ascending: slot (q, p) is the spring from point p to p + offsets[q]
-    stiffness, rest, amp_sin, amp_cos,  # [D, P, B] float64, k = 0 where a slot is no spring
+    stiffness,
+    rest,
+    amp_sin,
+    amp_cos,  # [D, P, B] float64, k = 0 where a slot is no spring
     damp,  # [D, P, B] each slot's dashpot over dt (N/m), or [0, 0, 0]: no material damping
-    omega, dt, n_steps, weight, ground_k, ground_c, friction, damping,
-    terrain_kind, terrain,  # softevo.core.robots.terrain.kernel_params
-    settle_step, settle_x, settle_y, settle_z,  # [P, B]
+    omega,
+    dt,
+    n_steps,
+    weight,
+    ground_k,
+    ground_c,
+    friction,
+    damping,
+    terrain_kind,
+    terrain,  # softevo.core.robots.terrain.kernel_params
+    settle_step,
+    settle_x,
+    settle_y,
+    settle_z,  # [P, B]
     energy,  # [D, P, B] actuator work of each slot from settle_step on (J), or [0, 0, 0]
-):  # fmt: skip
+):
     n_points, n_robots = x.shape
     n = n_points * n_robots
     n_dir = offsets.shape[0]

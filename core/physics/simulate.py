@@ -48,9 +48,11 @@ class Trajectory:
     phase: np.ndarray | None = None  # [S] actuation phase (rad), NaN for a passive spring
 
     def to_json(self) -> dict:
-        phase = None if self.phase is None else [
-            None if (q := to_null(p)) is None else round(q, 6) for p in self.phase.tolist()
-        ]  # fmt: skip
+        phase = (
+            None
+            if self.phase is None
+            else [None if (q := to_null(p)) is None else round(q, 6) for p in self.phase.tolist()]
+        )
         return {
             "format": "softevo.trajectory/1",
             "times": [round(t, 9) for t in self.times.tolist()],
@@ -238,11 +240,29 @@ def simulate(
     work = np.zeros(mech.n_springs if energy else 0)
     started = time.perf_counter()
     kernels.simulate_one(
-        pos[0], pos[1], pos[2], vel[0], vel[1], vel[2], step_factor,
-        np.ascontiguousarray(springs[:, 0]), np.ascontiguousarray(springs[:, 1]),
-        mech.stiffness, mech.rest_length, mech.amp_sin, mech.amp_cos, spring_dashpots(mech),
-        *scalars, settle_step, settle[0], settle[1], settle[2], record_every, frames, work,
-    )  # fmt: skip
+        pos[0],
+        pos[1],
+        pos[2],
+        vel[0],
+        vel[1],
+        vel[2],
+        step_factor,
+        np.ascontiguousarray(springs[:, 0]),
+        np.ascontiguousarray(springs[:, 1]),
+        mech.stiffness,
+        mech.rest_length,
+        mech.amp_sin,
+        mech.amp_cos,
+        spring_dashpots(mech),
+        *scalars,
+        settle_step,
+        settle[0],
+        settle[1],
+        settle[2],
+        record_every,
+        frames,
+        work,
+    )
     wall = time.perf_counter() - started
     result = _result(mech, settle.T, pos.T.copy(), wall, work if energy else None)
     if not record_every:
@@ -317,11 +337,25 @@ def _run_group(group: list[Mechanics], energy: bool) -> list[SimResult]:
     work = np.zeros(params.shape[1:] if energy else (0, 0, 0))
     started = time.perf_counter()
     kernels.simulate_many(
-        pos[0], pos[1], pos[2], vel[0], vel[1], vel[2], step_factor, offsets,
-        params[0], params[1], params[2], params[3],
-        params[4] if damped else np.zeros((0, 0, 0)), *_scalars(first),
-        settle[0], settle[1], settle[2], work,
-    )  # fmt: skip
+        pos[0],
+        pos[1],
+        pos[2],
+        vel[0],
+        vel[1],
+        vel[2],
+        step_factor,
+        offsets,
+        params[0],
+        params[1],
+        params[2],
+        params[3],
+        params[4] if damped else np.zeros((0, 0, 0)),
+        *_scalars(first),
+        settle[0],
+        settle[1],
+        settle[2],
+        work,
+    )
     wall = (time.perf_counter() - started) / n_robots
     results = []
     for r, (mech, rows, (slot, first_end)) in enumerate(zip(group, box_rows, slots, strict=True)):

@@ -48,8 +48,13 @@ WEIGHT = 3.0
 ROBOT_BOUNDS = np.array([GENE_BOUNDS["a"], GENE_BOUNDS["c"]])
 #: Chances of the NEAT mutations (one per mutation): weights, a node, a connection, an
 #: activation, the robot's a and c.
-MUTATIONS = (("weights", 0.5), ("node", 0.15), ("connection", 0.15), ("activation", 0.1),
-             ("actuation", 0.1))  # fmt: skip
+MUTATIONS = (
+    ("weights", 0.5),
+    ("node", 0.15),
+    ("connection", 0.15),
+    ("activation", 0.1),
+    ("actuation", 0.1),
+)
 #: Step of a perturbed weight, and the chance each weight is perturbed.
 WEIGHT_SIGMA, WEIGHT_RATE = 0.5, 0.5
 
@@ -110,10 +115,15 @@ class Network:
         nodes = tuple((d[1 + 2 * i], d[2 + 2 * i]) for i in range(n_nodes))
         base = 1 + 2 * n_nodes
         links = tuple(
-            Connection(d[base + 4 * i], d[base + 4 * i + 1], d[base + 4 * i + 2],
-                       bool(d[base + 4 * i + 3]), r[2 + i])
+            Connection(
+                d[base + 4 * i],
+                d[base + 4 * i + 1],
+                d[base + 4 * i + 2],
+                bool(d[base + 4 * i + 3]),
+                r[2 + i],
+            )
             for i in range(int(n_links))
-        )  # fmt: skip
+        )
         network = cls(nodes, links, r[0], r[1])
         network.validate()
         return network
@@ -165,8 +175,9 @@ class Network:
         links = [link for link in self.connections if link.enabled]
         zero = np.zeros(inputs.shape[1])
         for node in self.order():
-            total = sum((link.weight * values[link.source] for link in links
-                         if link.target == node), zero)  # fmt: skip
+            total = sum(
+                (link.weight * values[link.source] for link in links if link.target == node), zero
+            )
             values[node] = activate(ACTIVATIONS[activation[node]], total)
         return np.array([values[o] - _MIDDLE[ACTIVATIONS[activation[o]]] for o in OUTPUT_IDS])
 
@@ -241,8 +252,9 @@ class CppnEncoding(Encoding):
             network = mutate_network(network, rng)
         return network.genome()
 
-    def decode(self, genome: Genome) -> tuple[tuple[str, ...], tuple[float, ...],
-                                              tuple[float, ...], Actuation]:  # fmt: skip
+    def decode(
+        self, genome: Genome
+    ) -> tuple[tuple[str, ...], tuple[float, ...], tuple[float, ...], Actuation]:
         """Labels, phases, amplitudes and the robot's actuation of a genome's body."""
         network = Network.from_genome(genome)
         presence, muscle, stiffness, phase, amplitude = network.query(self.inputs)
@@ -251,8 +263,12 @@ class CppnEncoding(Encoding):
         low, high = GENE_BOUNDS["b"]
         amplitudes = low + (high - low) * (np.tanh(amplitude) + 1) / 2
         phases = math.pi * np.tanh(phase)
-        return (tuple(labels.tolist()), tuple(phases.tolist()), tuple(amplitudes.tolist()),
-                Actuation(network.a, 0.0, network.c))  # fmt: skip
+        return (
+            tuple(labels.tolist()),
+            tuple(phases.tolist()),
+            tuple(amplitudes.tolist()),
+            Actuation(network.a, 0.0, network.c),
+        )
 
     def labels(self, genome: Genome) -> tuple[int, ...]:
         """Label index of every voxel of the decoded body (what the descriptors read)."""
@@ -263,8 +279,10 @@ class CppnEncoding(Encoding):
         return VoxelRobot(self.shape, labels, actuation, sim, phases, amplitudes)
 
     def from_robot(self, robot: Robot) -> Genome:
-        raise EncodingError("a cppn genome cannot be read back from its body (many networks "
-                            "grow one body); its robot file is a voxel-phase robot")  # fmt: skip
+        raise EncodingError(
+            "a cppn genome cannot be read back from its body (many networks "
+            "grow one body); its robot file is a voxel-phase robot"
+        )
 
     def mate(
         self,

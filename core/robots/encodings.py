@@ -211,9 +211,13 @@ class VoxelPhaseEncoding(Encoding):
         n_voxels = math.prod(shape)
         self.segments = (Segment(0, n_voxels, len(LABELS)),)
         self.real_bounds = np.array(
-            [GENE_BOUNDS["a"], GENE_BOUNDS["c"], *[GENE_BOUNDS["b"]] * n_voxels,
-             *[PHASE_BOUNDS] * n_voxels]
-        )  # fmt: skip
+            [
+                GENE_BOUNDS["a"],
+                GENE_BOUNDS["c"],
+                *[GENE_BOUNDS["b"]] * n_voxels,
+                *[PHASE_BOUNDS] * n_voxels,
+            ]
+        )
 
     def to_robot(self, genome: Genome, sim: SimSettings) -> VoxelRobot:
         self.check(genome)

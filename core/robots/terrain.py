@@ -67,7 +67,9 @@ def sincos(angle: Any) -> tuple[Any, Any]:  # a float in the kernels, an array i
     s1, s2, s3, s4, s5, s6 = _SIN
     c1, c2, c3, c4, c5, c6 = _COS
     sin_r = r + r * r2 * (s1 + r2 * (s2 + r2 * (s3 + r2 * (s4 + r2 * (s5 + r2 * s6)))))
-    cos_r = 1.0 - 0.5 * r2 + r2 * r2 * (c1 + r2 * (c2 + r2 * (c3 + r2 * (c4 + r2 * (c5 + r2 * c6)))))  # fmt: skip # noqa: E501
+    cos_r = (
+        1.0 - 0.5 * r2 + r2 * r2 * (c1 + r2 * (c2 + r2 * (c3 + r2 * (c4 + r2 * (c5 + r2 * c6)))))
+    )
     # Turn (sin_r, cos_r) by q quarter turns: an odd q swaps them, q mod 4 in {2, 3} negates
     # sin. Products with 0, 1 or -1 and sums with 0 are exact, so this picks the bits.
     half = np.floor(q * 0.5)
@@ -113,8 +115,10 @@ class Slope(BaseModel):
         return [math.tan(angle), math.cos(angle), math.sin(angle)]
 
     def surface(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        return np.broadcast_to(np.asarray(x, dtype=float) * math.tan(math.radians(self.angle_deg)),
-                               np.broadcast(x, y).shape).copy()  # fmt: skip
+        return np.broadcast_to(
+            np.asarray(x, dtype=float) * math.tan(math.radians(self.angle_deg)),
+            np.broadcast(x, y).shape,
+        ).copy()
 
 
 class Steps(BaseModel):

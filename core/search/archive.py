@@ -39,26 +39,39 @@ class Elite:
 
     def to_json(self) -> dict[str, Any]:
         return {
-            "cell": list(self.cell), "values": list(self.values), "fitness": self.fitness,
-            "generation": self.generation, "index": self.index, "genome": self.genome.to_json(),
-        }  # fmt: skip
+            "cell": list(self.cell),
+            "values": list(self.values),
+            "fitness": self.fitness,
+            "generation": self.generation,
+            "index": self.index,
+            "genome": self.genome.to_json(),
+        }
 
     @cached_property
     def text(self) -> str:
         """`to_json` as JSON text, made once: an elite is written with the run's state every
         generation it stays an elite."""
         return with_genome(
-            {"cell": list(self.cell), "values": list(self.values), "fitness": self.fitness,
-             "generation": self.generation, "index": self.index},
+            {
+                "cell": list(self.cell),
+                "values": list(self.values),
+                "fitness": self.fitness,
+                "generation": self.generation,
+                "index": self.index,
+            },
             self.genome,
-        )  # fmt: skip
+        )
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> Elite:
         return cls(
-            tuple(data["cell"]), tuple(float(v) for v in data["values"]), float(data["fitness"]),
-            int(data["generation"]), int(data["index"]), Genome.from_json(data["genome"]),
-        )  # fmt: skip
+            tuple(data["cell"]),
+            tuple(float(v) for v in data["values"]),
+            float(data["fitness"]),
+            int(data["generation"]),
+            int(data["index"]),
+            Genome.from_json(data["genome"]),
+        )
 
 
 def _better(fitness: float, genome: Genome, elite: Elite) -> bool:

@@ -85,8 +85,11 @@ def _add_node(network: Network, rng: np.random.Generator) -> Network | None:
     """Split an enabled connection s -> t: it is disabled, s -> new (weight 1) and new -> t
     (its weight) added; the new node's id is the pair's, so the same split is one node."""
     ids = {node for node, _ in network.nodes}
-    links = [ln for ln in network.connections if ln.enabled and split_node(ln.source, ln.target)
-             not in ids]  # fmt: skip
+    links = [
+        ln
+        for ln in network.connections
+        if ln.enabled and split_node(ln.source, ln.target) not in ids
+    ]
     if not links:
         return None
     old = links[int(rng.integers(len(links)))]
@@ -99,8 +102,12 @@ def _add_node(network: Network, rng: np.random.Generator) -> Network | None:
     if any(link.innovation in taken for link in new):
         return None
     kept = [replace(ln, enabled=False) if ln is old else ln for ln in network.connections]
-    nodes = tuple(sorted([*network.nodes, (node, int(rng.integers(len(ACTIVATIONS))))],
-                         key=lambda item: (item[0] not in OUTPUT_IDS, item[0])))  # fmt: skip
+    nodes = tuple(
+        sorted(
+            [*network.nodes, (node, int(rng.integers(len(ACTIVATIONS))))],
+            key=lambda item: (item[0] not in OUTPUT_IDS, item[0]),
+        )
+    )
     connections = tuple(sorted([*kept, *new], key=lambda link: link.innovation))
     return replace(network, nodes=nodes, connections=connections)
 

@@ -65,18 +65,35 @@ def _fraction(body: Body, labels: tuple[int, ...]) -> float:
 CATALOGUE: dict[str, Descriptor] = {
     d.name: d
     for d in (
-        Descriptor("voxels", 0.0, 1.0, lambda b: len(b.labels) / (b.box[0] * b.box[1] * b.box[2]),
-                   "filled fraction of the bounding box"),
-        Descriptor("actuated", 0.0, 1.0, lambda b: _fraction(b, _ACTUATED),
-                   "actuated (sine, neg_sine) fraction of the filled voxels"),
-        Descriptor("soft", 0.0, 1.0, lambda b: _fraction(b, (_SOFT,)),
-                   "soft fraction of the filled voxels"),
-        Descriptor("height", 0.0, 1.0, lambda b: b.z_extent / b.box[2],
-                   "vertical extent of the body relative to the box's height"),
-        Descriptor("heading", -180.0, 180.0, None,
-                   "direction of travel (degrees, 0 = +x, 90 = +y)"),
+        Descriptor(
+            "voxels",
+            0.0,
+            1.0,
+            lambda b: len(b.labels) / (b.box[0] * b.box[1] * b.box[2]),
+            "filled fraction of the bounding box",
+        ),
+        Descriptor(
+            "actuated",
+            0.0,
+            1.0,
+            lambda b: _fraction(b, _ACTUATED),
+            "actuated (sine, neg_sine) fraction of the filled voxels",
+        ),
+        Descriptor(
+            "soft", 0.0, 1.0, lambda b: _fraction(b, (_SOFT,)), "soft fraction of the filled voxels"
+        ),
+        Descriptor(
+            "height",
+            0.0,
+            1.0,
+            lambda b: b.z_extent / b.box[2],
+            "vertical extent of the body relative to the box's height",
+        ),
+        Descriptor(
+            "heading", -180.0, 180.0, None, "direction of travel (degrees, 0 = +x, 90 = +y)"
+        ),
     )
-}  # fmt: skip
+}
 
 #: The behavioural descriptors: measured by the simulation (each a `SimResult` attribute).
 MEASURED = frozenset(name for name, d in CATALOGUE.items() if d.describe is None)
@@ -107,11 +124,19 @@ def largest_group(filled: int, box: tuple[int, int, int]) -> int:
     while left:
         group = left & -left  # the lowest voxel not yet in a group
         while True:
-            grown = group | (
-                ((group & not_last_x) << 1) | ((group & not_first_x) >> 1)
-                | ((group & not_last_y) << nx) | ((group & not_first_y) >> nx)
-                | (group << layer) | (group >> layer)
-            ) & everything & filled  # fmt: skip
+            grown = (
+                group
+                | (
+                    ((group & not_last_x) << 1)
+                    | ((group & not_first_x) >> 1)
+                    | ((group & not_last_y) << nx)
+                    | ((group & not_first_y) >> nx)
+                    | (group << layer)
+                    | (group >> layer)
+                )
+                & everything
+                & filled
+            )
             if grown == group:
                 break
             group = grown

@@ -179,10 +179,16 @@ class Stepper:
                 hooks.batch(generation, indices, result)
 
             values = evaluate_in_batches(
-                evaluator, files, f"{key}-gen{generation}", batch_size=self.batch_size,
-                in_flight=self.in_flight, check=hooks.check, on_batch=landed, alarm=hooks.alarm,
+                evaluator,
+                files,
+                f"{key}-gen{generation}",
+                batch_size=self.batch_size,
+                in_flight=self.in_flight,
+                check=hooks.check,
+                on_batch=landed,
+                alarm=hooks.alarm,
                 names=[hashes[i] for i in todo],  # a robot file is its genome's, in one run
-            )  # fmt: skip
+            )
             fitness.update(zip(todo, values.tolist(), strict=True))
         cache.update({hashes[index]: value for index, value in fitness.items()})
         measures.update({hashes[index]: record for index, record in records.items()})

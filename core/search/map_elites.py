@@ -97,9 +97,16 @@ class MapElites(Strategy):
     )
     Options = MapElitesOptions
     uses = (
-        "population", "generations", "descriptors", "bins", "crossover_probability",
-        "mutation_probability", "mutation_genes", "mutation_sigma", "immigrants",
-    )  # fmt: skip
+        "population",
+        "generations",
+        "descriptors",
+        "bins",
+        "crossover_probability",
+        "mutation_probability",
+        "mutation_genes",
+        "mutation_sigma",
+        "immigrants",
+    )
 
     @classmethod
     def check(cls, config: GAConfig) -> None:

@@ -81,9 +81,14 @@ class NSGA2(Strategy):
         "the fitness), parents by binary tournament, the GA's crossover and mutation"
     )
     uses = (
-        "population", "generations", "objectives", "crossover_probability",
-        "mutation_probability", "mutation_genes", "mutation_sigma",
-    )  # fmt: skip
+        "population",
+        "generations",
+        "objectives",
+        "crossover_probability",
+        "mutation_probability",
+        "mutation_genes",
+        "mutation_sigma",
+    )
     Options = SurvivorOptions
     reads_objectives = True
 

@@ -68,10 +68,19 @@ class PaperGA(Strategy):
         "roulette with elitism), two-point crossover, mutation, random immigrants"
     )
     uses = (
-        "population", "generations", "selection", "groups", "survival", "tournament_size",
-        "crossover_probability", "mutation_probability", "mutation_genes", "mutation_sigma",
-        "immigrants", "elitism",
-    )  # fmt: skip
+        "population",
+        "generations",
+        "selection",
+        "groups",
+        "survival",
+        "tournament_size",
+        "crossover_probability",
+        "mutation_probability",
+        "mutation_genes",
+        "mutation_sigma",
+        "immigrants",
+        "elitism",
+    )
     Options = GAOptions
 
     def __init__(self, config: GAConfig, encoding: Encoding) -> None:

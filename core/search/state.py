@@ -160,11 +160,13 @@ def _individuals_text(items: list[Individual] | None) -> str:
     """JSON text of `[item.to_json() for item in items]` (None: null), genomes as they are."""
     if items is None:
         return "null"
-    return "[{}]".format(", ".join(
-        f'{{"genome": {item.genome.canonical}, "operator": {_quoted(item.operator)}, '
-        f'"parents": {parents_text(item.parents)}}}'
-        for item in items
-    ))  # fmt: skip
+    return "[{}]".format(
+        ", ".join(
+            f'{{"genome": {item.genome.canonical}, "operator": {_quoted(item.operator)}, '
+            f'"parents": {parents_text(item.parents)}}}'
+            for item in items
+        )
+    )
 
 
 def _floats_to_json(values: list[float] | None) -> list[float | None] | None:

@@ -19,9 +19,18 @@ from softevo.core.robots.genome import Genome
 
 #: The learning-curve columns of the public contract, in order.
 CURVE_COLUMNS = (
-    "generation", "best", "mean", "median", "min", "best_so_far", "diversity", "evaluations",
-    "saved", "failed", "std",
-)  # fmt: skip
+    "generation",
+    "best",
+    "mean",
+    "median",
+    "min",
+    "best_so_far",
+    "diversity",
+    "evaluations",
+    "saved",
+    "failed",
+    "std",
+)
 
 
 #: The columns a run with an archive adds (quality-diversity, `softevo.core.search.archive`).

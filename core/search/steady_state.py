@@ -106,9 +106,15 @@ class SteadyState(Strategy):
         "frees and told in birth order, so the result does not depend on workers or timing"
     )
     uses = (
-        "population", "generations", "tournament_size", "crossover_probability",
-        "mutation_probability", "mutation_genes", "mutation_sigma", "immigrants",
-    )  # fmt: skip
+        "population",
+        "generations",
+        "tournament_size",
+        "crossover_probability",
+        "mutation_probability",
+        "mutation_genes",
+        "mutation_sigma",
+        "immigrants",
+    )
     Options = SteadyStateOptions
     streaming: ClassVar[bool] = True
 
@@ -164,9 +170,14 @@ class SteadyState(Strategy):
             return nursery
         window = deque(Birth.from_json(item) for item in kept["window"])
         return Nursery(
-            self, state, list(state.previous or []), list(state.previous_fitness or []),
-            list(kept["births"]), int(kept["told"]), window,
-        )  # fmt: skip
+            self,
+            state,
+            list(state.previous or []),
+            list(state.previous_fitness or []),
+            list(kept["births"]),
+            int(kept["told"]),
+            window,
+        )
 
     def _random(self, seed: int, number: int) -> Individual:
         return Individual(self.encoding.random(birth_rng(seed, number)), "random")
@@ -280,10 +291,14 @@ class Nursery:
         individuals = [item[0] for item in self.row]
         saved = sum(1 for item in self.row if item[3])
         told, stats = Strategy.tell(
-            self.strategy, self.state, individuals, [item[1] for item in self.row],
-            measures=[item[2] for item in self.row], evaluations=len(self.row) - saved,
+            self.strategy,
+            self.state,
+            individuals,
+            [item[1] for item in self.row],
+            measures=[item[2] for item in self.row],
+            evaluations=len(self.row) - saved,
             saved=saved,
-        )  # fmt: skip
+        )
         data = {
             **(told.data or {}),
             KEY: {

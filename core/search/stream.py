@@ -129,9 +129,11 @@ class _Row:
         for generation, members in _by_row(births, population).items():
             positions = list(members.values())
             part = BatchResult(
-                result.fitness[positions], result.worker,
-                result.seconds * len(positions) / len(births), [records[p] for p in positions],
-            )  # fmt: skip
+                result.fitness[positions],
+                result.worker,
+                result.seconds * len(positions) / len(births),
+                [records[p] for p in positions],
+            )
             self.hooks.batch(generation, list(members), part)
 
 

@@ -45,8 +45,14 @@ runs = sa.table("runs", sa.column("id", sa.Integer), sa.column("config", sa.JSON
 
 
 def _individuals(*columns: str) -> sa.TableClause:
-    types = {"id": sa.Integer, "run_id": sa.Integer, "status": sa.String, "fitness": sa.Float,
-             "heading": sa.Float, "measures": sa.JSON}  # fmt: skip
+    types = {
+        "id": sa.Integer,
+        "run_id": sa.Integer,
+        "status": sa.String,
+        "fitness": sa.Float,
+        "heading": sa.Float,
+        "measures": sa.JSON,
+    }
     return sa.table("individuals", *(sa.column(name, types[name]) for name in columns))
 
 

@@ -23,9 +23,11 @@ branch_labels = None
 depends_on = None
 
 runs = sa.table(
-    "runs", sa.column("id", sa.Integer), sa.column("ga_state", sa.JSON),
+    "runs",
+    sa.column("id", sa.Integer),
+    sa.column("ga_state", sa.JSON),
     sa.column("archive", sa.JSON),
-)  # fmt: skip
+)
 
 
 def upgrade() -> None:

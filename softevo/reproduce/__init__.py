@@ -38,30 +38,34 @@ def add_parser(commands: Any) -> None:
     )
     parser.add_argument("--quick", action="store_true", help="tiny settings, same code path")
     parser.add_argument(
-        "--tasks", action="store_true",
+        "--tasks",
+        action="store_true",
         help="run the task suite instead (task-flat, -slope, -stairs, -rough, -hurdles x seeds "
         "1-3, the GA against random search on its budget): tasks.csv, tasks.md, tasks.png",
-    )  # fmt: skip
+    )
     parser.add_argument(
-        "--qd", action="store_true",
+        "--qd",
+        action="store_true",
         help="run quality-diversity and co-design instead (4x4x3, 4x4x4, 3x3x6 x seeds 1-3: the "
         "GA, MAP-Elites on its budget, voxel-phase): qd.csv, qd.md, qd.png, qd_archives.png",
-    )  # fmt: skip
+    )
     parser.add_argument(
-        "--objectives", action="store_true",
+        "--objectives",
+        action="store_true",
         help="run several objectives and age protection instead (4x4x4 x seeds 1-3: NSGA-II, a "
         "weighted-sum GA with three weightings and random search, speed against cost of "
         "transport, on the same simulations; 4x4x3, 4x4x4, 3x3x6: AFPO against the GA on "
         "speed alone): tradeoff.csv, afpo.csv, objectives.md, fronts.png, hypervolume.png, "
         "afpo.png",
-    )  # fmt: skip
+    )
     parser.add_argument(
-        "--steady", action="store_true",
+        "--steady",
+        action="store_true",
         help="run asynchronous steady-state evolution against the paper's GA instead (4x4x3, "
         "4x4x4, 3x3x6 x seeds 1-3, on the GA's simulations, each run alone for its wall time; "
         "and one run again with robots that take time in proportion to their size, compared "
         "with the instant one): steady.csv, timing.csv, steady.md, steady.png",
-    )  # fmt: skip
+    )
     parser.add_argument(
         "--out",
         help="output folder, relative to the current folder (default docs/experiments; with "

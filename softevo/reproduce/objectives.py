@@ -31,8 +31,9 @@ from softevo.reproduce.client import wait_runs
 #: 4x4x4 robots': a front is scored on the robots that trade, not on the worst ones).
 COT_REFERENCE = 2000.0
 OBJECTIVES: list[Any] = [
-    "speed", {"measure": "cost_of_transport", "goal": "min", "reference": COT_REFERENCE},
-]  # fmt: skip
+    "speed",
+    {"measure": "cost_of_transport", "goal": "min", "reference": COT_REFERENCE},
+]
 #: The weighted GA's scales: w on speed / SPEED_SCALE, 1 - w on cost of transport / COT_SCALE
 #: (typical values of an evolved 4x4x4 robot), so a weight says how much each counts.
 SPEED_SCALE, COT_SCALE = 0.1, 1000.0
@@ -45,13 +46,17 @@ NSGA2_NEW = 0.1
 COLLAPSE = 0.25
 
 FULL: dict[str, Any] = {
-    "front_shape": [4, 4, 4], "shapes": [[4, 4, 3], [4, 4, 4], [3, 3, 6]], "seeds": [1, 2, 3],
+    "front_shape": [4, 4, 4],
+    "shapes": [[4, 4, 3], [4, 4, 4], [3, 3, 6]],
+    "seeds": [1, 2, 3],
     "settings": {},  # paper-voxel as it is: 100 generations
-}  # fmt: skip
+}
 QUICK: dict[str, Any] = {
-    "front_shape": [2, 2, 2], "shapes": [[2, 2, 2]], "seeds": [1],
+    "front_shape": [2, 2, 2],
+    "shapes": [[2, 2, 2]],
+    "seeds": [1],
     "settings": {"population": 6, "generations": 3, "sim": {"duration": 1.0, "settle_time": 0.3}},
-}  # fmt: skip
+}
 
 
 def weighted_name(weight: float) -> str:
@@ -124,23 +129,36 @@ def _second_round(
         )
         results.budgets[seed] = budget
         new = max(1.0, NSGA2_NEW * population)
-        submitted[("trade", "NSGA-II", seed)] = client.run(**{
-            **trade, "seed": seed, "algorithm": "nsga2",
-            "generations": 1 + math.ceil(max(0.0, budget - population) / new),
-        }).id  # fmt: skip
-        submitted[("trade", "random search", seed)] = client.run(**{
-            **trade, "seed": seed, "algorithm": "random",
-            "generations": math.ceil(budget / population),
-        }).id  # fmt: skip
+        submitted[("trade", "NSGA-II", seed)] = client.run(
+            **{
+                **trade,
+                "seed": seed,
+                "algorithm": "nsga2",
+                "generations": 1 + math.ceil(max(0.0, budget - population) / new),
+            }
+        ).id
+        submitted[("trade", "random search", seed)] = client.run(
+            **{
+                **trade,
+                "seed": seed,
+                "algorithm": "random",
+                "generations": math.ceil(budget / population),
+            }
+        ).id
     children = population - n_survivors(population, 0.5, newcomers=1)  # mutants and a newcomer
     for shape in plan["shapes"]:
         for seed in plan["seeds"]:
             ga = results.runs[("age", _box(shape), "GA", seed)]
             generations = 1 + round(max(0, ga["progress"]["evaluations"] - population) / children)
-            submitted[("age", _box(shape), "AFPO", seed)] = client.run(**{
-                **base, "shape": shape, "seed": seed, "algorithm": "afpo",
-                "generations": max(1, generations),
-            }).id  # fmt: skip
+            submitted[("age", _box(shape), "AFPO", seed)] = client.run(
+                **{
+                    **base,
+                    "shape": shape,
+                    "seed": seed,
+                    "algorithm": "afpo",
+                    "generations": max(1, generations),
+                }
+            ).id
     return submitted
 
 
@@ -183,22 +201,24 @@ def trade_rows(results: Results) -> list[dict[str, Any]]:
         at = [results.curves[k][results.cuts[k]] for k in keys]
         volumes = [row["hypervolume"] for row in at]
         wide = [pareto.hypervolume(front_values(specs, results.fronts[k]), default) for k in keys]
-        rows.append({
-            "method": method,
-            "hypervolume_by_seed": " ".join(f"{v:.3f}" for v in volumes),
-            "hypervolume_mean": statistics.fmean(volumes),
-            "hypervolume_std": statistics.pstdev(volumes),
-            "hypervolume_default_mean": statistics.fmean(wide),
-            "front_size_mean": statistics.fmean(row["front_size"] for row in at),
-            "best_speed_mean": statistics.fmean(row["best_so_far"] for row in at),
-            "lowest_cot_mean": statistics.fmean(
-                min(p["measures"]["cost_of_transport"] for p in results.fronts[k]) for k in keys
-            ),
-            "simulations_mean": statistics.fmean(
-                simulations_at(results.curves[k], results.cuts[k]) for k in keys
-            ),
-            "generations_read": " ".join(str(results.cuts[k] + 1) for k in keys),
-        })  # fmt: skip
+        rows.append(
+            {
+                "method": method,
+                "hypervolume_by_seed": " ".join(f"{v:.3f}" for v in volumes),
+                "hypervolume_mean": statistics.fmean(volumes),
+                "hypervolume_std": statistics.pstdev(volumes),
+                "hypervolume_default_mean": statistics.fmean(wide),
+                "front_size_mean": statistics.fmean(row["front_size"] for row in at),
+                "best_speed_mean": statistics.fmean(row["best_so_far"] for row in at),
+                "lowest_cot_mean": statistics.fmean(
+                    min(p["measures"]["cost_of_transport"] for p in results.fronts[k]) for k in keys
+                ),
+                "simulations_mean": statistics.fmean(
+                    simulations_at(results.curves[k], results.cuts[k]) for k in keys
+                ),
+                "generations_read": " ".join(str(results.cuts[k] + 1) for k in keys),
+            }
+        )
     return rows
 
 
@@ -211,22 +231,24 @@ def age_rows(results: Results) -> list[dict[str, Any]]:
             curves = [results.curves[k] for k in keys]
             best = [curve[-1]["best_so_far"] for curve in curves]
             below = ["-" if b is None else str(b) for b in map(_first_below, curves)]
-            rows.append({
-                "box": _box(shape),
-                "method": method,
-                "best_by_seed": " ".join(f"{b:.4f}" for b in best),
-                "best_mean": statistics.fmean(best),
-                "best_std": statistics.pstdev(best),
-                "simulations_mean": statistics.fmean(
-                    simulations_at(c, c[-1]["generation"]) for c in curves
-                ),
-                "generations": curves[0][-1]["generation"] + 1,
-                "collapse_generation_by_seed": " ".join(below),
-                "final_diversity_mean": statistics.fmean(c[-1]["diversity"] for c in curves),
-                "min_diversity_mean": statistics.fmean(
-                    min(r["diversity"] for r in c) for c in curves
-                ),
-            })  # fmt: skip
+            rows.append(
+                {
+                    "box": _box(shape),
+                    "method": method,
+                    "best_by_seed": " ".join(f"{b:.4f}" for b in best),
+                    "best_mean": statistics.fmean(best),
+                    "best_std": statistics.pstdev(best),
+                    "simulations_mean": statistics.fmean(
+                        simulations_at(c, c[-1]["generation"]) for c in curves
+                    ),
+                    "generations": curves[0][-1]["generation"] + 1,
+                    "collapse_generation_by_seed": " ".join(below),
+                    "final_diversity_mean": statistics.fmean(c[-1]["diversity"] for c in curves),
+                    "min_diversity_mean": statistics.fmean(
+                        min(r["diversity"] for r in c) for c in curves
+                    ),
+                }
+            )
     return rows
 
 

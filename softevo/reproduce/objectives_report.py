@@ -23,8 +23,9 @@ from softevo.reproduce.objectives import (
 )
 from softevo.reproduce.tables import fmt
 
-COLOURS = dict(zip(TRADE_METHODS, ("tab:red", "tab:blue", "tab:purple", "tab:green", "0.5"),
-                   strict=True))  # fmt: skip
+COLOURS = dict(
+    zip(TRADE_METHODS, ("tab:red", "tab:blue", "tab:purple", "tab:green", "0.5"), strict=True)
+)
 AGE_COLOURS = {"GA": "tab:blue", "AFPO": "tab:orange"}
 STYLES = ("-", "--", ":", "-.")
 
@@ -37,12 +38,21 @@ def write_objectives(results: Results, out: Path, command: str, wall: float) -> 
             writer = csv.DictWriter(handle, list(rows[0]), lineterminator="\n")
             writer.writeheader()
             writer.writerows(rows)
-    lines = [*_trade_table(results, trade), *_age_table(age),
-             f"Command: `{command}`; {wall:.0f} s.", ""]  # fmt: skip
+    lines = [
+        *_trade_table(results, trade),
+        *_age_table(age),
+        f"Command: `{command}`; {wall:.0f} s.",
+        "",
+    ]
     (out / "objectives.md").write_text("\n".join(lines))
-    return [out / "tradeoff.csv", out / "afpo.csv", out / "objectives.md",
-            _fronts(results, out / "fronts.png"), _volumes(results, out / "hypervolume.png"),
-            _age(results, out / "afpo.png")]  # fmt: skip
+    return [
+        out / "tradeoff.csv",
+        out / "afpo.csv",
+        out / "objectives.md",
+        _fronts(results, out / "fronts.png"),
+        _volumes(results, out / "hypervolume.png"),
+        _age(results, out / "afpo.png"),
+    ]
 
 
 def _trade_table(results: Results, rows: list[dict[str, Any]]) -> list[str]:
@@ -98,24 +108,36 @@ def _fronts(results: Results, path: Path) -> Path:
     """Each seed's fronts of every method at the budget, in one figure (a panel per seed)."""
     plt = figures.pyplot()
     seeds = results.plan["seeds"]
-    figure, axes = plt.subplots(1, len(seeds), figsize=(4.2 * len(seeds) + 1.6, 3.8),
-                                squeeze=False, sharey=True)  # fmt: skip
+    figure, axes = plt.subplots(
+        1, len(seeds), figsize=(4.2 * len(seeds) + 1.6, 3.8), squeeze=False, sharey=True
+    )
     for ax, seed in zip(axes[0], seeds, strict=True):
         for method in TRADE_METHODS:
             points = sorted(
                 (p["measures"]["speed"], p["measures"]["cost_of_transport"])
                 for p in results.fronts[("trade", method, seed)]
             )
-            ax.step([x for x, _ in points], [y for _, y in points], where="pre", marker="o",
-                    markersize=3.5, lw=1, color=COLOURS[method], label=method)  # fmt: skip
+            ax.step(
+                [x for x, _ in points],
+                [y for _, y in points],
+                where="pre",
+                marker="o",
+                markersize=3.5,
+                lw=1,
+                color=COLOURS[method],
+                label=method,
+            )
         ax.axhline(COT_REFERENCE, color="black", lw=0.6, ls="--")
         ax.set_yscale("log")
         ax.set_title(f"seed {seed}, {results.budgets[seed]:.0f} simulations", fontsize=9)
         ax.set_xlabel("speed (m/s; higher is better)")
     axes[0][0].set_ylabel("cost of transport (1; lower is better)")
     axes[0][-1].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    figure.suptitle(f"Pareto fronts at the same simulations (dashed: the hypervolume reference, "
-                    f"{COT_REFERENCE:g})", fontsize=9)  # fmt: skip
+    figure.suptitle(
+        f"Pareto fronts at the same simulations (dashed: the hypervolume reference, "
+        f"{COT_REFERENCE:g})",
+        fontsize=9,
+    )
     figure.tight_layout()
     return figures.save(figure, path)
 
@@ -129,9 +151,14 @@ def _volumes(results: Results, path: Path) -> Path:
             key = ("trade", method, seed)
             rows = results.curves[key][: results.cuts[key] + 1]
             x = [simulations_at(rows, row["generation"]) for row in rows]
-            ax.plot(x, [row["hypervolume"] for row in rows], color=COLOURS[method],
-                    ls=STYLES[n % len(STYLES)], lw=1.1,
-                    label=method if n == 0 else None)  # fmt: skip
+            ax.plot(
+                x,
+                [row["hypervolume"] for row in rows],
+                color=COLOURS[method],
+                ls=STYLES[n % len(STYLES)],
+                lw=1.1,
+                label=method if n == 0 else None,
+            )
     ax.set_xlabel("simulations")
     ax.set_ylabel(f"hypervolume (m/s x cost of transport,\nreference (0, {COT_REFERENCE:g}))")
     ax.legend(fontsize=7, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
@@ -144,8 +171,9 @@ def _age(results: Results, path: Path) -> Path:
     """Per box: best speed so far and diversity against simulations, GA and AFPO, per seed."""
     plt = figures.pyplot()
     shapes = results.plan["shapes"]
-    figure, axes = plt.subplots(2, len(shapes), figsize=(4.0 * len(shapes) + 1.4, 6.0),
-                                squeeze=False)  # fmt: skip
+    figure, axes = plt.subplots(
+        2, len(shapes), figsize=(4.0 * len(shapes) + 1.4, 6.0), squeeze=False
+    )
     for column, shape in enumerate(shapes):
         box = "x".join(map(str, shape))
         for method in AGE_METHODS:
@@ -163,7 +191,8 @@ def _age(results: Results, path: Path) -> Path:
     axes[0][0].set_ylabel("best speed so far (m/s)")
     axes[1][0].set_ylabel("diversity (mean pairwise\nHamming distance of the labels)")
     axes[0][-1].legend(fontsize=7, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    figure.suptitle(f"AFPO against the paper's GA on speed alone (dashed: diversity {COLLAPSE:g})",
-                    fontsize=9)  # fmt: skip
+    figure.suptitle(
+        f"AFPO against the paper's GA on speed alone (dashed: diversity {COLLAPSE:g})", fontsize=9
+    )
     figure.tight_layout()
     return figures.save(figure, path)

@@ -25,17 +25,25 @@ from softevo.reproduce.tables import fmt
 QD: dict[str, Any] = {"descriptors": ["voxels", "actuated"], "bins": [8, 8]}
 FULL: dict[str, Any] = {"shapes": [[4, 4, 3], [4, 4, 4], [3, 3, 6]], "seeds": [1, 2, 3]}
 QUICK: dict[str, Any] = {
-    "shapes": [[2, 2, 2]], "seeds": [1],
+    "shapes": [[2, 2, 2]],
+    "seeds": [1],
     "settings": {"population": 6, "generations": 3, "sim": {"duration": 1.5, "settle_time": 0.5}},
-}  # fmt: skip
+}
 VARIANTS = ("ga", "map-elites", "voxel-phase")
 #: An elite "reaches the best" when its speed is at least this fraction of the best speed any
 #: variant found on that box and seed.
 NEAR_BEST = 0.8
 COLUMNS = [
-    "box", "variant", "best_by_seed", "best_mean", "best_std", "coverage_mean", "qd_score_mean",
-    "near_best_cells_mean", "simulations_mean",
-]  # fmt: skip
+    "box",
+    "variant",
+    "best_by_seed",
+    "best_mean",
+    "best_std",
+    "coverage_mean",
+    "qd_score_mean",
+    "near_best_cells_mean",
+    "simulations_mean",
+]
 
 
 def run_qd(client: Client, quick: bool) -> tuple[list[dict[str, Any]], dict[tuple, Any]]:
@@ -56,17 +64,32 @@ def run_qd(client: Client, quick: bool) -> tuple[list[dict[str, Any]], dict[tupl
         population = ga["config"]["population"]
         generations = max(1, round(ga["progress"]["evaluations"] / population))
         elites[(shape, "map-elites", seed)] = client.run(
-            **{**base, "shape": list(shape), "seed": seed, "algorithm": "map-elites",
-               "generations": generations}
-        ).id  # fmt: skip
+            **{
+                **base,
+                "shape": list(shape),
+                "seed": seed,
+                "algorithm": "map-elites",
+                "generations": generations,
+            }
+        ).id
     done.update(zip(elites, wait_runs(client, list(elites.values()), "qd"), strict=True))
     archives = {key: client.get(f"/runs/{run['id']}/archive") for key, run in done.items()}
     rows = [
-        _row(shape, variant, [(done[(shape, variant, s)], archives[(shape, variant, s)],
-                               _reference(done, shape, s)) for s in plan["seeds"]])
+        _row(
+            shape,
+            variant,
+            [
+                (
+                    done[(shape, variant, s)],
+                    archives[(shape, variant, s)],
+                    _reference(done, shape, s),
+                )
+                for s in plan["seeds"]
+            ],
+        )
         for shape in dict.fromkeys(shape for shape, _ in keys)
         for variant in VARIANTS
-    ]  # fmt: skip
+    ]
     return rows, archives
 
 
@@ -101,11 +124,12 @@ def write_qd(
         writer.writeheader()
         writer.writerows(rows)
     lines = [
-        "# Quality-diversity and co-design: MAP-Elites and voxel-phase against the GA", "",
+        "# Quality-diversity and co-design: MAP-Elites and voxel-phase against the GA",
+        "",
         "| box | variant | best speed, m/s (mean ± std) | coverage | QD-score | cells >= 80 % "
         "of the best | simulations |",
         "| --- | --- | ---: | ---: | ---: | ---: | ---: |",
-    ]  # fmt: skip
+    ]
     for row in rows:
         lines.append(
             f"| {row['box']} | {row['variant']} | {fmt(row['best_mean'])} ± "
@@ -115,8 +139,12 @@ def write_qd(
         )
     lines += ["", f"Command: `{command}`; {wall:.0f} s.", ""]
     (out / "qd.md").write_text("\n".join(lines))
-    return [out / "qd.csv", out / "qd.md", _bars(rows, out / "qd.png"),
-            _archives(archives, out / "qd_archives.png")]  # fmt: skip
+    return [
+        out / "qd.csv",
+        out / "qd.md",
+        _bars(rows, out / "qd.png"),
+        _archives(archives, out / "qd_archives.png"),
+    ]
 
 
 def _bars(rows: list[dict[str, Any]], path: Path) -> Path:
@@ -124,23 +152,31 @@ def _bars(rows: list[dict[str, Any]], path: Path) -> Path:
 
     plt = figures.pyplot()
     boxes = list(dict.fromkeys(row["box"] for row in rows))
-    measures = (("best_mean", "best speed (m/s)"), ("coverage_mean", "archive coverage"),
-                ("qd_score_mean", "QD-score (sum of elites' speed, m/s)"))  # fmt: skip
+    measures = (
+        ("best_mean", "best speed (m/s)"),
+        ("coverage_mean", "archive coverage"),
+        ("qd_score_mean", "QD-score (sum of elites' speed, m/s)"),
+    )
     figure, axes = plt.subplots(1, 3, figsize=(11, 3.4))
     width = 0.8 / len(VARIANTS)
     colours = {"ga": "tab:blue", "map-elites": "tab:green", "voxel-phase": "tab:orange"}
     for ax, (key, label) in zip(axes, measures, strict=True):
         for k, variant in enumerate(VARIANTS):
-            values = [next(r[key] for r in rows if r["box"] == b and r["variant"] == variant)
-                      for b in boxes]  # fmt: skip
+            values = [
+                next(r[key] for r in rows if r["box"] == b and r["variant"] == variant)
+                for b in boxes
+            ]
             positions = [i + (k - 1) * width for i in range(len(boxes))]
             ax.bar(positions, values, width, label=variant, color=colours[variant])
         ax.set_xticks(range(len(boxes)), boxes)
         ax.set_xlabel("bounding box")
         ax.set_ylabel(label)
     axes[0].legend(fontsize=8)
-    figure.suptitle("mean over seeds; MAP-Elites on the GA's simulation budget; archive: "
-                    "voxels x actuated, 8 x 8", fontsize=9)  # fmt: skip
+    figure.suptitle(
+        "mean over seeds; MAP-Elites on the GA's simulation budget; archive: "
+        "voxels x actuated, 8 x 8",
+        fontsize=9,
+    )
     figure.tight_layout()
     return figures.save(figure, path)
 
@@ -158,20 +194,31 @@ def _archives(archives: dict[tuple, Any], path: Path) -> Path:
     seed = min(seed for _, _, seed in archives)
     chosen = {v: archives[(shape, v, seed)] for v in VARIANTS}
     grids = {
-        v: archive_grid({"bins": [a["descriptors"][0]["bins"], a["descriptors"][1]["bins"]],
-                         "elites": a["cells"]})
+        v: archive_grid(
+            {
+                "bins": [a["descriptors"][0]["bins"], a["descriptors"][1]["bins"]],
+                "elites": a["cells"],
+            }
+        )
         for v, a in chosen.items()
-    }  # fmt: skip
+    }
     high = max(float(np.nanmax(g)) if np.isfinite(g).any() else 0.0 for g in grids.values())
     figure, axes = plt.subplots(1, 3, figsize=(11, 3.6))
     for ax, (variant, grid) in zip(axes, grids.items(), strict=True):
-        image = ax.imshow(grid.T, origin="lower", extent=[0, 1, 0, 1], vmin=0, vmax=high,
-                          cmap="viridis", interpolation="none", aspect="auto")  # fmt: skip
+        image = ax.imshow(
+            grid.T,
+            origin="lower",
+            extent=[0, 1, 0, 1],
+            vmin=0,
+            vmax=high,
+            cmap="viridis",
+            interpolation="none",
+            aspect="auto",
+        )
         ax.grid(False)
         ax.set_title(f"{variant}: {int(np.isfinite(grid).sum())} of {grid.size} cells", fontsize=9)
         ax.set_xlabel("voxels (filled fraction of the box)")
     axes[0].set_ylabel("actuated fraction of the filled voxels")
     figure.colorbar(image, ax=list(axes), label="elite's speed (m/s)")
-    figure.suptitle(f"archives after the run, {'x'.join(map(str, shape))}, seed {seed}",
-                    fontsize=9)  # fmt: skip
+    figure.suptitle(f"archives after the run, {'x'.join(map(str, shape))}, seed {seed}", fontsize=9)
     return figures.save(figure, path)

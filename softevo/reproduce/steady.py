@@ -46,17 +46,21 @@ from softevo.core.search.evolution import Evolution
 RUNNING = 1
 POLL = 0.25  # s between two questions about a run
 FULL: dict[str, Any] = {
-    "shapes": [[4, 4, 3], [4, 4, 4], [3, 3, 6]], "seeds": [1, 2, 3],
+    "shapes": [[4, 4, 3], [4, 4, 4], [3, 3, 6]],
+    "seeds": [1, 2, 3],
     # paper-voxel with half its 100 generations, for both methods: the suite's 27 runs then fit
     # in about 50 minutes on two shared cores
     "settings": {"generations": 50},
-    "timed": ([4, 4, 4], 1), "per_voxel": 0.004,
-}  # fmt: skip
+    "timed": ([4, 4, 4], 1),
+    "per_voxel": 0.004,
+}
 QUICK: dict[str, Any] = {
-    "shapes": [[2, 2, 2]], "seeds": [1],
+    "shapes": [[2, 2, 2]],
+    "seeds": [1],
     "settings": {"population": 6, "generations": 4, "sim": {"duration": 1.0, "settle_time": 0.3}},
-    "timed": ([2, 2, 2], 1), "per_voxel": 0.004,
-}  # fmt: skip
+    "timed": ([2, 2, 2], 1),
+    "per_voxel": 0.004,
+}
 GA, STEADY, LONG = "GA", "steady-state", "steady-state, the GA's births"
 METHODS = (GA, STEADY, LONG)
 GA_AGAIN = "GA, again"  # round 2's GA, run beside the matched steady-state run
@@ -207,8 +211,9 @@ def timing_check(results: Results, workers: int | None) -> dict[str, Any]:
     plan = results.plan
     shape, seed = plan["timed"]
     name = box(shape)
-    config = resolve({**request(plan, shape, seed, STEADY),
-                      "generations": results.matched[(name, seed)]})  # fmt: skip
+    config = resolve(
+        {**request(plan, shape, seed, STEADY), "generations": results.matched[(name, seed)]}
+    )
     evolutions, walls = [], []
     with make_evaluator(workers) as inner:
         _warm(inner)
@@ -222,15 +227,22 @@ def timing_check(results: Results, workers: int | None) -> dict[str, Any]:
     instant, sized = evolutions
     service = results.curves[(name, STEADY, seed)]
     return {
-        "box": name, "seed": seed, "rows": len(instant.curve()),
-        "per_voxel": plan["per_voxel"], "slots": timed.slots, "workers": inner.capacity(),
+        "box": name,
+        "seed": seed,
+        "rows": len(instant.curve()),
+        "per_voxel": plan["per_voxel"],
+        "slots": timed.slots,
+        "workers": inner.capacity(),
         "curve_equal": instant.curve() == sized.curve(),
         "state_equal": instant.state.to_json() == sized.state.to_json(),
         "service_equal": same_rows(instant.curve(), service),
-        "batches": len(timed.landed), "overtaken": overtaken(timed.landed),
-        "held_seconds": timed.held, "wall_instant": walls[0], "wall_timed": walls[1],
+        "batches": len(timed.landed),
+        "overtaken": overtaken(timed.landed),
+        "held_seconds": timed.held,
+        "wall_instant": walls[0],
+        "wall_timed": walls[1],
         "best": instant.curve()[-1]["best_so_far"],
-    }  # fmt: skip
+    }
 
 
 def _warm(evaluator: Evaluator) -> None:

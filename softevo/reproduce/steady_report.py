@@ -42,20 +42,25 @@ def steady_rows(results: Results) -> list[dict[str, Any]]:
             walls = [wall_seconds(r) for r in runs]
             beside = [wall_seconds(results.runs[(k[0], BESIDE[method], k[2])]) for k in keys]
             population = runs[0]["config"]["population"]
-            rows.append({
-                "box": box(shape), "method": method,
-                "best_by_seed": " ".join(f"{b:.4f}" for b in best),
-                "best_mean": statistics.fmean(best), "best_std": statistics.pstdev(best),
-                "simulations_by_seed": " ".join(map(str, sims)),
-                "simulations_mean": statistics.fmean(sims),
-                "births_by_seed": " ".join(str(len(c) * population) for c in curves),
-                "wall_by_seed": " ".join(f"{w:.1f}" for w in walls),
-                "wall_mean": statistics.fmean(walls), "wall_std": statistics.pstdev(walls),
-                "ga_beside_by_seed": " ".join(f"{w:.1f}" for w in beside),
-                "ga_beside_mean": statistics.fmean(beside),
-                "wall_ratio": sum(walls) / sum(beside),
-                "seconds_per_simulation": sum(walls) / sum(sims),
-            })  # fmt: skip
+            rows.append(
+                {
+                    "box": box(shape),
+                    "method": method,
+                    "best_by_seed": " ".join(f"{b:.4f}" for b in best),
+                    "best_mean": statistics.fmean(best),
+                    "best_std": statistics.pstdev(best),
+                    "simulations_by_seed": " ".join(map(str, sims)),
+                    "simulations_mean": statistics.fmean(sims),
+                    "births_by_seed": " ".join(str(len(c) * population) for c in curves),
+                    "wall_by_seed": " ".join(f"{w:.1f}" for w in walls),
+                    "wall_mean": statistics.fmean(walls),
+                    "wall_std": statistics.pstdev(walls),
+                    "ga_beside_by_seed": " ".join(f"{w:.1f}" for w in beside),
+                    "ga_beside_mean": statistics.fmean(beside),
+                    "wall_ratio": sum(walls) / sum(beside),
+                    "seconds_per_simulation": sum(walls) / sum(sims),
+                }
+            )
     return rows
 
 
@@ -64,11 +69,19 @@ def write_steady(results: Results, out: Path, command: str, wall: float) -> list
     rows = steady_rows(results)
     _csv(out / "steady.csv", rows)
     _csv(out / "timing.csv", [results.timing])
-    lines = [*_table(results, rows), *_timing(results.timing),
-             f"Command: `{command}`; {wall:.0f} s.", ""]  # fmt: skip
+    lines = [
+        *_table(results, rows),
+        *_timing(results.timing),
+        f"Command: `{command}`; {wall:.0f} s.",
+        "",
+    ]
     (out / "steady.md").write_text("\n".join(lines))
-    return [out / "steady.csv", out / "timing.csv", out / "steady.md",
-            _figure(results, rows, out / "steady.png")]  # fmt: skip
+    return [
+        out / "steady.csv",
+        out / "timing.csv",
+        out / "steady.md",
+        _figure(results, rows, out / "steady.png"),
+    ]
 
 
 def _csv(path: Path, rows: list[dict[str, Any]]) -> None:
@@ -137,8 +150,9 @@ def _figure(results: Results, rows: list[dict[str, Any]], path: Path) -> Path:
     a dot where its matched run ends), and the wall times."""
     plt = figures.pyplot()
     shapes = results.plan["shapes"]
-    figure, axes = plt.subplots(2, len(shapes), figsize=(4.0 * len(shapes) + 1.6, 6.2),
-                                squeeze=False, height_ratios=(2, 1))  # fmt: skip
+    figure, axes = plt.subplots(
+        2, len(shapes), figsize=(4.0 * len(shapes) + 1.6, 6.2), squeeze=False, height_ratios=(2, 1)
+    )
     for column, shape in enumerate(shapes):
         name, ax = box(shape), axes[0][column]
         for n, seed in enumerate(results.plan["seeds"]):
@@ -146,11 +160,18 @@ def _figure(results: Results, rows: list[dict[str, Any]], path: Path) -> Path:
                 curve = results.curves[(name, method, seed)]
                 x = [simulations(curve, i + 1) for i in range(len(curve))]
                 label = f"{'GA' if method == GA else 'steady-state'}, seed {seed}"
-                ax.plot(x, [r["best_so_far"] for r in curve], color=COLOURS[method],
-                        ls=STYLES[n % len(STYLES)], lw=1.1, label=label)  # fmt: skip
+                ax.plot(
+                    x,
+                    [r["best_so_far"] for r in curve],
+                    color=COLOURS[method],
+                    ls=STYLES[n % len(STYLES)],
+                    lw=1.1,
+                    label=label,
+                )
             matched = results.curves[(name, STEADY, seed)]
-            ax.plot(simulations(matched), matched[-1]["best_so_far"], "o", ms=4,
-                    color=COLOURS[STEADY])  # fmt: skip
+            ax.plot(
+                simulations(matched), matched[-1]["best_so_far"], "o", ms=4, color=COLOURS[STEADY]
+            )
             ax.axvline(results.budgets[(name, seed)], color="0.6", lw=0.5, ls=STYLES[n % 4])
         ax.set_title(name, fontsize=9)
         ax.set_xlabel("simulations")
@@ -158,8 +179,11 @@ def _figure(results: Results, rows: list[dict[str, Any]], path: Path) -> Path:
     axes[0][0].set_ylabel("best speed so far (m/s)")
     axes[1][0].set_ylabel("wall time, s (alone;\nin pairs, as taken)")
     axes[0][-1].legend(fontsize=7, frameon=False, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    figure.suptitle("steady-state against the paper's GA (grey: the GA's simulations; dot: "
-                    "steady-state on them)", fontsize=9)  # fmt: skip
+    figure.suptitle(
+        "steady-state against the paper's GA (grey: the GA's simulations; dot: "
+        "steady-state on them)",
+        fontsize=9,
+    )
     figure.tight_layout()
     return figures.save(figure, path)
 

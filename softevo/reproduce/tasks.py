@@ -21,14 +21,27 @@ from softevo.reproduce.tables import fmt
 
 FULL_SUITE: dict[str, Any] = {"seeds": [1, 2, 3]}
 QUICK_SUITE: dict[str, Any] = {
-    "seeds": [1], "population": 6, "generations": 3, "shapes": [[2, 2, 2]],
+    "seeds": [1],
+    "population": 6,
+    "generations": 3,
+    "shapes": [[2, 2, 2]],
     "sim": {"duration": 1.5, "settle_time": 0.5},
-}  # fmt: skip
+}
 COLUMNS = [
-    "task", "objective", "unit", "ga_best_by_seed", "ga_best_mean", "ga_best_std",
-    "random_best_by_seed", "random_best_mean", "random_best_std", "ga_minus_random",
-    "ga_evaluations_mean", "random_evaluations_mean", "ga_wins",
-]  # fmt: skip
+    "task",
+    "objective",
+    "unit",
+    "ga_best_by_seed",
+    "ga_best_mean",
+    "ga_best_std",
+    "random_best_by_seed",
+    "random_best_mean",
+    "random_best_std",
+    "ga_minus_random",
+    "ga_evaluations_mean",
+    "random_evaluations_mean",
+    "ga_wins",
+]
 
 
 def run_suite(client: Client, quick: bool) -> list[dict[str, Any]]:
@@ -45,12 +58,18 @@ def run_suite(client: Client, quick: bool) -> list[dict[str, Any]]:
         population = runs[0]["config"]["population"]
         budget = statistics.fmean(r["progress"]["evaluations"] for r in runs)
         random_ids[task] = [
-            client.run(**{
-                **base, "preset": task, "seed": run["seed"], "algorithm": "random",
-                "population": population, "generations": max(1, round(budget / population)),
-            }).id
+            client.run(
+                **{
+                    **base,
+                    "preset": task,
+                    "seed": run["seed"],
+                    "algorithm": "random",
+                    "population": population,
+                    "generations": max(1, round(budget / population)),
+                }
+            ).id
             for run in runs
-        ]  # fmt: skip
+        ]
     random = {task: wait_runs(client, ids, "tasks") for task, ids in random_ids.items()}
     return [_row(task, ga[task], random[task]) for task in TASKS]
 
@@ -66,10 +85,12 @@ def _row(task: str, ga: list[dict[str, Any]], random: list[dict[str, Any]]) -> d
     ga_best, random_best = _best(ga), _best(random)
     by_seed = {r["seed"]: r["progress"]["best_fitness"] for r in random}
     wins = sum(
-        1 for r in ga
-        if r["progress"]["best_fitness"] is not None and by_seed.get(r["seed"]) is not None
+        1
+        for r in ga
+        if r["progress"]["best_fitness"] is not None
+        and by_seed.get(r["seed"]) is not None
         and r["progress"]["best_fitness"] > by_seed[r["seed"]]
-    )  # fmt: skip
+    )
     mean = statistics.fmean
     return {
         "task": task,
@@ -95,11 +116,12 @@ def write_suite(rows: list[dict[str, Any]], out: Path, command: str, wall: float
         writer.writeheader()
         writer.writerows(rows)
     lines = [
-        "# The task suite: the GA against random search on the same budget", "",
+        "# The task suite: the GA against random search on the same budget",
+        "",
         "| task | objective | GA best (mean ± std) | random search best (mean ± std) | GA - random "
         "| GA beats random (seeds) | simulations GA / random |",
         "| --- | --- | ---: | ---: | ---: | ---: | ---: |",
-    ]  # fmt: skip
+    ]
     for row in rows:
         lines.append(
             f"| {row['task']} | {objective_label(row['objective'])} | "

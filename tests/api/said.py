@@ -16,9 +16,15 @@ AUTH = {"Authorization": "Bearer t"}  # the token the tests' services are starte
 
 
 def said_and_survived(
-    env: Mapping[str, str], log: Path, request: dict[str, Any], undisturbed: list[dict[str, Any]],
-    word: str, start: Callable[[], None], end: Callable[[], None], after: int = 1,
-) -> None:  # fmt: skip
+    env: Mapping[str, str],
+    log: Path,
+    request: dict[str, Any],
+    undisturbed: list[dict[str, Any]],
+    word: str,
+    start: Callable[[], None],
+    end: Callable[[], None],
+    after: int = 1,
+) -> None:
     """Start the service (token "t"), send `request`, and once `after` generations are committed
     `start()` the fault. `/healthz` (with the token) must answer 503 naming it (`word`), say no
     reason to a caller without the token, the run's `problem` must name it, and the log say it a
@@ -42,8 +48,10 @@ def said_and_survived(
             assert run["status"] == "running", f"the run ended {run['status']} under the fault"
             assert time.monotonic() - started < 60, health.text
             time.sleep(0.2)
-        print(f"[{word}] /healthz said {health.json()['database']!r} "
-              f"{time.monotonic() - started:.2f} s after the fault began")  # fmt: skip
+        print(
+            f"[{word}] /healthz said {health.json()['database']!r} "
+            f"{time.monotonic() - started:.2f} s after the fault began"
+        )
         assert client.get("/healthz").json()["database"] == "cannot write"  # no reason to anyone
         problem = client.get(f"/runs/{run_id}").json()["problem"]
         assert problem and word in problem, problem

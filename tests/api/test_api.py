@@ -126,8 +126,22 @@ def test_a_run_through_the_api_has_the_curve_of_softevo_run(
 ) -> None:
     run_id = start(client, seed=5, population=8, generations=4)
     run = wait_for(client, run_id, ("completed",))
-    argv = ["run", "--preset", "quick", "--seed", "5", "--population", "8", "--generations", "4",
-            "--workers", "1", "--json", "--out", str(tmp_path / "out")]  # fmt: skip
+    argv = [
+        "run",
+        "--preset",
+        "quick",
+        "--seed",
+        "5",
+        "--population",
+        "8",
+        "--generations",
+        "4",
+        "--workers",
+        "1",
+        "--json",
+        "--out",
+        str(tmp_path / "out"),
+    ]
     assert main(argv) == 0
     printed = json.loads(capsys.readouterr().out)
     assert client.get(f"/runs/{run_id}/curve").json()["generations"] == printed["generations"]
@@ -397,9 +411,15 @@ def test_reads_never_load_the_ga_state(client: TestClient) -> None:
     engine = client.app.state.db.engine  # type: ignore[attr-defined]
     event.listen(engine, "before_cursor_execute", seen)
     try:
-        for path in ("/runs", f"/runs/{run_id}", f"/runs/{run_id}/curve",
-                     f"/runs/{run_id}/individuals", f"/runs/{run_id}/best",
-                     f"/runs/{run_id}/archive", f"/runs/{run_id}/archive?robots=true"):  # fmt: skip
+        for path in (
+            "/runs",
+            f"/runs/{run_id}",
+            f"/runs/{run_id}/curve",
+            f"/runs/{run_id}/individuals",
+            f"/runs/{run_id}/best",
+            f"/runs/{run_id}/archive",
+            f"/runs/{run_id}/archive?robots=true",
+        ):
             assert client.get(path).status_code == 200, path
         with client.stream("GET", f"/runs/{run_id}/events") as stream:
             assert "event: end" in "".join(stream.iter_text())

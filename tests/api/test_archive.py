@@ -14,10 +14,16 @@ from softevo.core.search.evolution import Evolution
 from tests.api.finished import finished
 
 QD = {
-    "preset": "quick", "seed": 4, "population": 8, "generations": 3, "shape": [2, 2, 2],
-    "algorithm": "map-elites", "descriptors": ["voxels", "actuated"], "bins": [4, 3],
+    "preset": "quick",
+    "seed": 4,
+    "population": 8,
+    "generations": 3,
+    "shape": [2, 2, 2],
+    "algorithm": "map-elites",
+    "descriptors": ["voxels", "actuated"],
+    "bins": [4, 3],
     "sim": {"duration": 1.0, "settle_time": 0.3},
-}  # fmt: skip
+}
 
 
 def test_a_map_elites_run_serves_the_archive_softevo_run_builds(client: TestClient) -> None:
@@ -37,8 +43,10 @@ def test_a_map_elites_run_serves_the_archive_softevo_run_builds(client: TestClie
     assert archive["generations"] == 3
     for cell in archive["cells"]:  # each cell's elite is that individual, with its descriptors
         individual = client.get(f"/runs/{run['id']}/individuals/{cell['id']}").json()
-        assert (individual["generation"], individual["index"]) == (cell["generation"],
-                                                                   cell["index"])  # fmt: skip
+        assert (individual["generation"], individual["index"]) == (
+            cell["generation"],
+            cell["index"],
+        )
         assert individual["fitness"] == cell["fitness"]
         robot = parse_robot(cell["robot"])
         labels = [LABELS.index(label) for label in robot.voxels]

@@ -14,10 +14,16 @@ from softevo.core.search.evolution import Evolution
 from tests.api.finished import finished
 
 HEADING = {
-    "preset": "quick", "seed": 4, "population": 8, "generations": 3, "shape": [2, 2, 2],
-    "algorithm": "map-elites", "descriptors": ["heading", "actuated"], "bins": [6, 3],
+    "preset": "quick",
+    "seed": 4,
+    "population": 8,
+    "generations": 3,
+    "shape": [2, 2, 2],
+    "algorithm": "map-elites",
+    "descriptors": ["heading", "actuated"],
+    "bins": [6, 3],
     "sim": {"duration": 1.0, "settle_time": 0.3},
-}  # fmt: skip
+}
 
 
 def test_the_archive_endpoint_reports_each_elites_measured_heading(client: TestClient) -> None:

@@ -19,7 +19,7 @@ from sqlalchemy.exc import IntegrityError
 from softevo.api import store
 from softevo.api.coordinator import Coordinator
 from softevo.api.db import Database
-from softevo.api.models import Base, Individual
+from softevo.api.models import Base, IndividualRow
 from softevo.api.store import front as front_store
 from softevo.core import evaluator as batches
 from softevo.core.config import resolve
@@ -58,12 +58,20 @@ def test_migrations_create_exactly_the_models_schema(db: Database) -> None:
 
 def test_a_second_row_for_an_individual_is_impossible(db: Database) -> None:
     run = store.create_run(db, resolve(REQUEST))
-    row = {"run_id": run.id, "generation": 0, "index": 0, "genome": {}, "genome_hash": "h",
-           "operator": "random", "parents": [], "status": "pending"}  # fmt: skip
-    with db.write() as session:
-        session.add(Individual(**row))
-    with pytest.raises(IntegrityError), db.write() as session:
-        session.add(Individual(**row))
+    row = {
+        "run_id": run.id,
+        "generation": 0,
+        "index": 0,
+        "genome": {},
+        "genome_hash": "h",
+        "operator": "random",
+        "parents": [],
+        "status": "pending",
+    }
+    with db.write_session() as session:
+        session.add(IndividualRow(**row))
+    with pytest.raises(IntegrityError), db.write_session() as session:
+        session.add(IndividualRow(**row))
 
 
 def test_lease_is_exclusive_until_it_expires(db: Database) -> None:
@@ -138,11 +146,12 @@ def test_takeover_after_a_coordinator_freezes_gives_the_undisturbed_curve(
         first.stop()
     record = store.get_run(db, run.id)
     assert record.takeovers >= 1 and record.error is None
-    with db.read() as session:
+    with db.read_session() as session:
         statuses = session.execute(
-            select(Individual.status, func.count()).where(Individual.run_id == run.id)
-            .group_by(Individual.status)
-        ).all()  # fmt: skip
+            select(IndividualRow.status, func.count())
+            .where(IndividualRow.run_id == run.id)
+            .group_by(IndividualRow.status)
+        ).all()
     assert "pending" not in dict(statuses)
     assert sum(count for _, count in statuses) == 8 * 4
     reference = undisturbed(request_body)
@@ -247,13 +256,14 @@ def test_fitness_waiting_for_its_write_is_saved_at_a_shutdown(
     assert all(landings.acquire(timeout=10) for _ in range(3))  # landed in the step, unsaved
     first.stop()
     frozen.release.set()
-    with db.read() as session:
+    with db.read_session() as session:
         saved = session.scalar(
             select(func.count()).where(
-                Individual.run_id == run.id, Individual.generation == 0,
-                Individual.status.in_(("evaluated", "failed")),
+                IndividualRow.run_id == run.id,
+                IndividualRow.generation == 0,
+                IndividualRow.status.in_(("evaluated", "failed")),
             )
-        )  # fmt: skip
+        )
     assert saved == 6
     successor = Counting()
     assert drive(db, run.id, successor, batch_size=2) == "completed"

@@ -34,14 +34,29 @@ def test_the_papers_experiments_fit_the_default_budget() -> None:
     ("body", "words"),
     [
         # the issue's examples: about 3 CPU-years of simulation, and 16 GB of genomes
-        ({"preset": "paper-voxel", "shape": [8, 8, 8], "population": 1000,
-          "generations": 1000, "sim": {"dt": 1e-4, "duration": 60.0}},
-         ["4.47e+15 spring-steps", "SOFTEVO_MAX_SPRING_STEPS"]),
-        ({"preset": "quick", "encoding": "spring", "shape": [8, 8, 8], "population": 1000,
-          "generations": 1000, "sim": {"duration": 0.5, "settle_time": 0.1}},
-         ["1.64e+10 bytes", "SOFTEVO_MAX_STORED_BYTES"]),  # rows 1.63e10, + the state's
+        (
+            {
+                "preset": "paper-voxel",
+                "shape": [8, 8, 8],
+                "population": 1000,
+                "generations": 1000,
+                "sim": {"dt": 1e-4, "duration": 60.0},
+            },
+            ["4.47e+15 spring-steps", "SOFTEVO_MAX_SPRING_STEPS"],
+        ),
+        (
+            {
+                "preset": "quick",
+                "encoding": "spring",
+                "shape": [8, 8, 8],
+                "population": 1000,
+                "generations": 1000,
+                "sim": {"duration": 0.5, "settle_time": 0.1},
+            },
+            ["1.64e+10 bytes", "SOFTEVO_MAX_STORED_BYTES"],
+        ),  # rows 1.63e10, + the state's
     ],
-)  # fmt: skip
+)
 def test_a_run_over_the_budget_is_refused_with_its_cost(
     make_client: Callable[..., TestClient], body: dict, words: list[str]
 ) -> None:
@@ -58,8 +73,9 @@ def test_a_sweep_counts_the_sum_of_its_runs(make_client: Callable[..., TestClien
     client = make_client(limits=Limits(max_spring_steps=one * 2.5))  # two runs fit, not three
     fits = client.post("/sweeps", json={"preset": "quick", "shapes": [[3, 3, 3]], "seeds": [1, 2]})
     assert fits.status_code == 201, fits.text
-    over = client.post("/sweeps", json={"preset": "quick", "shapes": [[3, 3, 3]],
-                                        "seeds": [1, 2, 3]})  # fmt: skip
+    over = client.post(
+        "/sweeps", json={"preset": "quick", "shapes": [[3, 3, 3]], "seeds": [1, 2, 3]}
+    )
     assert over.status_code == 422 and "these 3 runs" in over.json()["detail"][0]["msg"]
     assert client.get("/sweeps/2").status_code == 404  # nothing of it was queued
 
@@ -86,10 +102,12 @@ def _cost(**change: object) -> tuple[float, float]:
         ({"sim": {"terrain": {"kind": "slope", "angle_deg": 10}}}, TERRAIN_COST["slope"]),
         ({"sim": {"terrain": {"kind": "rough", "amplitude": 100}}}, TERRAIN_COST["rough"]),
         ({"sim": {"terrain": {"kind": "steps"}}}, TERRAIN_COST["steps"]),
-        ({"sim": {"terrain": {"kind": "hurdles"}}, "objective": "efficiency"},
-         TERRAIN_COST["hurdles"] * OBJECTIVE_COST["efficiency"]),
+        (
+            {"sim": {"terrain": {"kind": "hurdles"}}, "objective": "efficiency"},
+            TERRAIN_COST["hurdles"] * OBJECTIVE_COST["efficiency"],
+        ),
     ],
-)  # fmt: skip
+)
 def test_what_costs_more_than_flat_ground_counts_more(change: dict, factor: float) -> None:
     """Measured against flat ground: efficiency 1.46-1.70x, slope 1.26x, rough 1.28x (issue
     39, bench/cost_factors.py); each factor covers what was measured."""

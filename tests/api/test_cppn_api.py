@@ -10,8 +10,15 @@ from softevo.api.settings import Limits
 from softevo.api.validation import RequestError, run_config
 from tests.api.finished import finished
 
-REQUEST = {"preset": "quick", "encoding": "cppn", "seed": 2, "population": 4, "generations": 2,
-           "shape": [2, 2, 2], "sim": {"duration": 0.5, "settle_time": 0.1}}  # fmt: skip
+REQUEST = {
+    "preset": "quick",
+    "encoding": "cppn",
+    "seed": 2,
+    "population": 4,
+    "generations": 2,
+    "shape": [2, 2, 2],
+    "sim": {"duration": 0.5, "settle_time": 0.1},
+}
 
 
 def test_a_cppn_run_stores_networks_and_serves_decoded_bodies(client: TestClient) -> None:
@@ -37,9 +44,12 @@ def test_big_cppn_boxes_pass_the_limits_and_bad_configs_do_not() -> None:
 
 @pytest.mark.parametrize(
     ("body", "field"),
-    [({"encoding": "cppn2"}, "encoding"), ({"encoding": "cppn", "descriptors": ["bogus"]},
-      "descriptors"), ({"encoding": "cppn", "shape": [11, 10, 10]}, "shape")],
-)  # fmt: skip
+    [
+        ({"encoding": "cppn2"}, "encoding"),
+        ({"encoding": "cppn", "descriptors": ["bogus"]}, "descriptors"),
+        ({"encoding": "cppn", "shape": [11, 10, 10]}, "shape"),
+    ],
+)
 def test_bad_cppn_configs_are_422(client: TestClient, body: dict, field: str) -> None:
     response = client.post("/runs", json={"preset": "quick", **body})
     assert response.status_code == 422, response.text

@@ -40,8 +40,12 @@ RANDOM_REQUEST: dict[str, Any] = {**REQUEST, "sim": {"duration": 20.0}}
 #: The same run as MAP-Elites: its archive rides in the GA state the generation commit writes,
 #: over a descriptor of the body and the behavioural `heading` (the headings saved before the
 #: kill are read back, not measured again).
-QD_REQUEST = {**REQUEST, "algorithm": "map-elites", "descriptors": ["heading", "actuated"],
-              "bins": [8, 5]}  # fmt: skip
+QD_REQUEST = {
+    **REQUEST,
+    "algorithm": "map-elites",
+    "descriptors": ["heading", "actuated"],
+    "bins": [8, 5],
+}
 #: The same run as steady-state: births kept as they are bred, rows of 16 births; the births in
 #: flight at the kill are bred again by the successor, which finds those saved before it. (It
 #: simulates every birth, twice the GA's robots, each as long.)
@@ -520,7 +524,9 @@ def test_sigkill_of_the_server_leaves_no_pool_process(tmp_path: Path) -> None:
         while any(_alive(pid) for pid in children):
             assert time.monotonic() - killed < 15, [p for p in children if _alive(p)]
             time.sleep(0.1)
-        print(f"[h] {len(children)} children of the SIGKILLed server gone "
-              f"{time.monotonic() - killed:.2f} s after")  # fmt: skip
+        print(
+            f"[h] {len(children)} children of the SIGKILLed server gone "
+            f"{time.monotonic() - killed:.2f} s after"
+        )
     finally:
         local.stop()

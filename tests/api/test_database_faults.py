@@ -269,12 +269,28 @@ def test_a_database_that_turns_read_only_is_said_and_the_run_goes_on_after(
             connection.execute(
                 text(f'ALTER DATABASE "{name}" SET default_transaction_read_only = {value}')
             )
-            connection.execute(text(
-                "SELECT pg_terminate_backend(pid) FROM pg_stat_activity "
-                "WHERE datname = :name AND pid <> pg_backend_pid()"), {"name": name})  # fmt: skip
+            connection.execute(
+                text(
+                    "SELECT pg_terminate_backend(pid) FROM pg_stat_activity "
+                    "WHERE datname = :name AND pid <> pg_backend_pid()"
+                ),
+                {"name": name},
+            )
 
-    env = service_env(database_url=database, api_token="t", workers="1", poll_seconds="0.2",
-                      lease_seconds=str(LEASE_SECONDS))  # fmt: skip
-    said_and_survived(env, tmp_path / "serve.log", REQUEST, undisturbed, "read-only",
-                      lambda: read_only(True), lambda: read_only(False))  # fmt: skip
+    env = service_env(
+        database_url=database,
+        api_token="t",
+        workers="1",
+        poll_seconds="0.2",
+        lease_seconds=str(LEASE_SECONDS),
+    )
+    said_and_survived(
+        env,
+        tmp_path / "serve.log",
+        REQUEST,
+        undisturbed,
+        "read-only",
+        lambda: read_only(True),
+        lambda: read_only(False),
+    )
     admin.dispose()

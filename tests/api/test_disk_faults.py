@@ -39,8 +39,10 @@ def small_disk(tmp_path: Path) -> Iterator[Path]:
     mount.mkdir()
     done = subprocess.run(
         ["mount", "-t", "tmpfs", "-o", "size=16m", "tmpfs", str(mount)],
-        capture_output=True, text=True, check=False,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     if done.returncode != 0:
         if os.environ.get("CI") == "true":
             pytest.fail(f"CI runs as root and must mount a tmpfs: {done.stderr.strip()}")
@@ -70,11 +72,20 @@ def fill(folder: Path) -> Path:
 def test_a_full_disk_is_said_and_the_run_goes_on_after(small_disk: Path, tmp_path: Path) -> None:
     reference = undisturbed(REQUEST).curve()
     env = service_env(
-        database_url=f"sqlite:///{small_disk / 'softevo.db'}", api_token="t", workers="1",
-        poll_seconds="0.2", lease_seconds="2",
-    )  # fmt: skip
+        database_url=f"sqlite:///{small_disk / 'softevo.db'}",
+        api_token="t",
+        workers="1",
+        poll_seconds="0.2",
+        lease_seconds="2",
+    )
     filler: list[Path] = []
     said_and_survived(
-        env, tmp_path / "serve.log", REQUEST, reference, "full",
-        lambda: filler.append(fill(small_disk)), lambda: filler.pop().unlink(), after=2,
-    )  # fmt: skip
+        env,
+        tmp_path / "serve.log",
+        REQUEST,
+        reference,
+        "full",
+        lambda: filler.append(fill(small_disk)),
+        lambda: filler.pop().unlink(),
+        after=2,
+    )

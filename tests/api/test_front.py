@@ -14,17 +14,27 @@ from softevo.core.search import pareto
 from softevo.core.search.front import front_values
 from tests.api.test_api import wait_for
 
-RUN = {"preset": "quick", "seed": 2, "shape": [2, 2, 2], "population": 6, "generations": 3,
-       "sim": {"duration": 1.0}, "algorithm": "nsga2",
-       "objectives": ["speed", "-cost_of_transport"]}  # fmt: skip
+RUN = {
+    "preset": "quick",
+    "seed": 2,
+    "shape": [2, 2, 2],
+    "population": 6,
+    "generations": 3,
+    "sim": {"duration": 1.0},
+    "algorithm": "nsga2",
+    "objectives": ["speed", "-cost_of_transport"],
+}
 
 
 def test_the_front_dominates_every_other_individual(client: TestClient) -> None:
     run_id = client.post("/runs", json=RUN).json()["id"]
     wait_for(client, run_id, ("completed",))
     front = client.get(f"/runs/{run_id}/front").json()
-    assert front["objectives"][1] == {"measure": "cost_of_transport", "goal": "min",
-                                      "reference": 100_000.0}  # fmt: skip
+    assert front["objectives"][1] == {
+        "measure": "cost_of_transport",
+        "goal": "min",
+        "reference": 100_000.0,
+    }
     specs = resolve(RUN).objectives
     points = front_values(specs, front["points"])
     assert len(points) >= 1 and not np.isnan(points).any()

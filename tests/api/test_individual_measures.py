@@ -13,8 +13,15 @@ from softevo.core.physics.evaluation import SerialEvaluator
 from softevo.core.search.evolution import Evolution
 from tests.api.finished import finished
 
-REQUEST = {"preset": "quick", "seed": 2, "population": 6, "generations": 2, "shape": [2, 2, 2],
-           "objective": "forward", "sim": {"duration": 1.0}}  # fmt: skip
+REQUEST = {
+    "preset": "quick",
+    "seed": 2,
+    "population": 6,
+    "generations": 2,
+    "shape": [2, 2, 2],
+    "objective": "forward",
+    "sim": {"duration": 1.0},
+}
 
 
 def test_every_evaluated_individual_has_the_measures_of_the_run_in_process(

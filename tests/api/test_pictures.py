@@ -42,9 +42,12 @@ def test_best_as_gif_and_thumbnail(client: TestClient, finished: int) -> None:
 
 @pytest.mark.parametrize(
     ("params", "limit"),
-    [({"fps": SERVICE_PICTURE_FPS + 1}, SERVICE_PICTURE_FPS), ({"fps": 0.1}, MIN_PICTURE_FPS),
-     ({"duration": SERVICE_PICTURE_SECONDS * 2}, SERVICE_PICTURE_SECONDS)],
-)  # fmt: skip
+    [
+        ({"fps": SERVICE_PICTURE_FPS + 1}, SERVICE_PICTURE_FPS),
+        ({"fps": 0.1}, MIN_PICTURE_FPS),
+        ({"duration": SERVICE_PICTURE_SECONDS * 2}, SERVICE_PICTURE_SECONDS),
+    ],
+)
 def test_out_of_range_fps_or_duration_is_a_422(
     client: TestClient, params: dict[str, float], limit: float
 ) -> None:

@@ -15,7 +15,7 @@ from sqlalchemy import event, insert
 
 from softevo.api import store
 from softevo.api.db import Database
-from softevo.api.models import Individual
+from softevo.api.models import IndividualRow
 from softevo.core.config import RunConfig
 
 GENOME = re.compile(r"individuals\.genome\b(?!_)")  # the column, not genome_hash
@@ -25,19 +25,31 @@ POPULATION = 4
 def fill(db: Database, generations: int = 3) -> tuple[int, list[float | None]]:
     """A run of `generations` x POPULATION individuals written directly (no simulation); its
     id and fitness in order, None for the failed ones."""
-    config = RunConfig.model_validate({"preset": "quick", "seed": 1, "population": POPULATION,
-                                       "generations": generations})  # fmt: skip
+    config = RunConfig.model_validate(
+        {"preset": "quick", "seed": 1, "population": POPULATION, "generations": generations}
+    )
     run = store.create_run(db, config)
     genome = json.loads(config.make_encoding().random(np.random.default_rng(1)).canonical)
     fitness = [None if n % 5 == 3 else 0.01 * n for n in range(generations * POPULATION)]
-    with db.write() as session:
-        session.execute(insert(Individual), [
-            {"run_id": run.id, "generation": n // POPULATION, "index": n % POPULATION,
-             "genome": genome, "genome_hash": f"{n:016d}", "operator": "mutation", "parents": [],
-             "status": "failed" if value is None else "evaluated", "fitness": value,
-             "evaluated_at": datetime.now(UTC)}
-            for n, value in enumerate(fitness)
-        ])  # fmt: skip
+    with db.write_session() as session:
+        session.execute(
+            insert(IndividualRow),
+            [
+                {
+                    "run_id": run.id,
+                    "generation": n // POPULATION,
+                    "index": n % POPULATION,
+                    "genome": genome,
+                    "genome_hash": f"{n:016d}",
+                    "operator": "mutation",
+                    "parents": [],
+                    "status": "failed" if value is None else "evaluated",
+                    "fitness": value,
+                    "evaluated_at": datetime.now(UTC),
+                }
+                for n, value in enumerate(fitness)
+            ],
+        )
     return run.id, fitness
 
 

@@ -20,14 +20,26 @@ from softevo.api.settings import Settings
 from softevo.core.physics.evaluation import SerialEvaluator
 
 STATIC = Path(__file__).resolve().parents[2] / "api" / "dashboard" / "static"
-READS = ("/runs", "/runs/1", "/runs/1/curve", "/runs/1/archive", "/sweeps", "/presets",
-         "/runs/1/figures/curve.png", "/runs/1/events")  # fmt: skip
+READS = (
+    "/runs",
+    "/runs/1",
+    "/runs/1/curve",
+    "/runs/1/archive",
+    "/sweeps",
+    "/presets",
+    "/runs/1/figures/curve.png",
+    "/runs/1/events",
+)
 
 
 @pytest.fixture
 def guarded(tmp_path: Path) -> Iterator[TestClient]:
-    settings = Settings(database_url=f"sqlite:///{tmp_path / 'softevo.db'}", api_token="s3cret",
-                        protect_reads=True, poll_seconds=0.05)  # fmt: skip
+    settings = Settings(
+        database_url=f"sqlite:///{tmp_path / 'softevo.db'}",
+        api_token="s3cret",
+        protect_reads=True,
+        poll_seconds=0.05,
+    )
     with TestClient(create_app(settings, lambda _s: SerialEvaluator())) as client:
         yield client
 
@@ -106,8 +118,9 @@ def test_the_dashboard_sends_the_token_on_reads_and_keeps_it_in_a_cookie(tmp_pat
     module.write_text((STATIC / "api.js").read_text())
     script = tmp_path / "check.mjs"
     script.write_text(DASHBOARD_CHECK)
-    done = subprocess.run([node, str(script), str(module)], capture_output=True, text=True,
-                          timeout=30, check=True)  # fmt: skip
+    done = subprocess.run(
+        [node, str(script), str(module)], capture_output=True, text=True, timeout=30, check=True
+    )
     result = json.loads(done.stdout)
     assert result["seen"] == ["Bearer s3 cret"]
     assert result["cookies"][0].startswith("softevo_token=s3%20cret; path=/; SameSite=Strict")

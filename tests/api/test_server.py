@@ -22,9 +22,11 @@ KEEP_ALIVE_SECONDS = 1.0
 def service(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LocalService]:
     folder = tmp_path_factory.mktemp("server")
     env = service_env(
-        database_url=f"sqlite:///{folder / 'server.db'}", workers="1",
-        header_seconds=str(HEADER_SECONDS), keep_alive_seconds=str(KEEP_ALIVE_SECONDS),
-    )  # fmt: skip
+        database_url=f"sqlite:///{folder / 'server.db'}",
+        workers="1",
+        header_seconds=str(HEADER_SECONDS),
+        keep_alive_seconds=str(KEEP_ALIVE_SECONDS),
+    )
     with start_service(env, folder / "serve.log") as local:
         yield local
 
@@ -64,9 +66,10 @@ def read_response(sock: socket.socket) -> bytes:
         data += sock.recv(4096)
     head, _, body = data.partition(b"\r\n\r\n")
     length = next(
-        int(line.split(b":", 1)[1]) for line in head.split(b"\r\n")
+        int(line.split(b":", 1)[1])
+        for line in head.split(b"\r\n")
         if line.lower().startswith(b"content-length:")
-    )  # fmt: skip
+    )
     while len(body) < length:
         body += sock.recv(4096)
     return head

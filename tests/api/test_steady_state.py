@@ -10,7 +10,7 @@ from sqlalchemy import func, select
 from softevo.api import store
 from softevo.api.coordinator import Coordinator
 from softevo.api.db import Database
-from softevo.api.models import Individual
+from softevo.api.models import IndividualRow
 from softevo.core.config import resolve
 from softevo.core.physics.evaluation import SerialEvaluator
 from softevo.core.search.evolution import Evolution
@@ -19,17 +19,22 @@ from tests.api.test_coordinator import FreezingEvaluator, drive, wait_status
 from tests.reference import undisturbed
 
 REQUEST = {
-    "preset": "quick", "seed": 6, "population": 8, "generations": 4,
-    "algorithm": "steady-state", "options": {"window": 6},
-}  # fmt: skip
+    "preset": "quick",
+    "seed": 6,
+    "population": 8,
+    "generations": 4,
+    "algorithm": "steady-state",
+    "options": {"window": 6},
+}
 
 
 def _rows(db: Database, run_id: int) -> dict[str, int]:
-    with db.read() as session:
+    with db.read_session() as session:
         counts = session.execute(
-            select(Individual.status, func.count()).where(Individual.run_id == run_id)
-            .group_by(Individual.status)
-        ).all()  # fmt: skip
+            select(IndividualRow.status, func.count())
+            .where(IndividualRow.run_id == run_id)
+            .group_by(IndividualRow.status)
+        ).all()
     return dict(counts)  # type: ignore[arg-type]
 
 

@@ -21,9 +21,12 @@ TINY = {
 def test_a_run_on_a_slope_is_scored_by_its_objective(client: TestClient) -> None:
     """The stored best fitness is the best robot's climb rate on the slope, re-simulated."""
     body = {
-        **TINY, "preset": "quick", "seed": 2, "objective": "climb",
+        **TINY,
+        "preset": "quick",
+        "seed": 2,
+        "objective": "climb",
         "sim": {"duration": 1.0, "terrain": {"kind": "slope", "angle_deg": 8}},
-    }  # fmt: skip
+    }
     response = client.post("/runs", json=body)
     assert response.status_code == 201, response.text
     run = finished(client, response.json()["id"])
@@ -73,8 +76,9 @@ def test_a_sweep_over_tasks_and_seeds(client: TestClient) -> None:
     assert response.status_code == 201, response.text
     groups = response.json()["boxes"]
     assert [(g["task"], g["shape"]) for g in groups] == [
-        ("task-flat", [2, 2, 2]), ("task-stairs", [2, 2, 2]),
-    ]  # fmt: skip
+        ("task-flat", [2, 2, 2]),
+        ("task-stairs", [2, 2, 2]),
+    ]
     for group in groups:
         runs = [finished(client, run_id) for run_id in group["run_ids"]]
         assert sorted(run["seed"] for run in runs) == [1, 2]

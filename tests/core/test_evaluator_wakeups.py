@@ -79,9 +79,13 @@ def test_the_alarm_wakes_a_waiting_step_which_keeps_what_landed(
     def step() -> None:
         try:
             evaluate_in_batches(
-                gated, [{"robot": i} for i in range(2)], batch_size=1, check=check,
-                on_batch=lambda batch, _result: heard.append(batch), alarm=alarm,
-            )  # fmt: skip
+                gated,
+                [{"robot": i} for i in range(2)],
+                batch_size=1,
+                check=check,
+                on_batch=lambda batch, _result: heard.append(batch),
+                alarm=alarm,
+            )
         except StoppedError as error:
             outcome.append(error)
 

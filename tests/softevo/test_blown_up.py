@@ -49,9 +49,15 @@ def test_replay_draws_a_robot_that_blew_up_without_a_traceback(
 ) -> None:
     out = tmp_path / "boom.gif"
     done = softevo(
-        "replay", str(_blowing_up(examples, tmp_path)), "--out", str(out),
-        "--fps", "4", "--duration", "1",
-    )  # fmt: skip
+        "replay",
+        str(_blowing_up(examples, tmp_path)),
+        "--out",
+        str(out),
+        "--fps",
+        "4",
+        "--duration",
+        "1",
+    )
     assert done.returncode == 0, done.stderr
     with Image.open(out) as image:
         assert image.n_frames == 4

@@ -19,8 +19,14 @@ from softevo.api.store import folders
 from softevo.core.config import resolve
 from softevo.core.search.generation import Step
 
-CONFIG = {"preset": "quick", "population": 6, "generations": 4, "seed": 3, "shape": [2, 2, 2],
-          "sim": {"duration": 1.0}}  # fmt: skip
+CONFIG = {
+    "preset": "quick",
+    "population": 6,
+    "generations": 4,
+    "seed": 3,
+    "shape": [2, 2, 2],
+    "sim": {"duration": 1.0},
+}
 #: NSGA-II and AFPO with objectives: their kept values, births, lineages and the front so far
 #: ride in the state, and must come back from the store as they were.
 PARETO = {"objectives": ["speed", "-cost_of_transport"]}

@@ -145,10 +145,19 @@ def test_simulate_says_how_many_cut_off_voxels_it_dropped(tmp_path: Path) -> Non
 
 def test_simulate_into_a_closed_pipe_exits_quietly(examples: Path) -> None:
     process = subprocess.Popen(
-        [sys.executable, "-P", "-m", "softevo.cli", "simulate", str(examples / "paper_cube.json"),
-         "--duration", "1.5"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-P",
+            "-m",
+            "softevo.cli",
+            "simulate",
+            str(examples / "paper_cube.json"),
+            "--duration",
+            "1.5",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
     assert process.stdout is not None and process.stderr is not None
     process.stdout.close()  # what `| head` does once it has its lines: the reader goes away
     stderr = process.stderr.read().decode()

@@ -75,8 +75,9 @@ def test_a_map_elites_runs_archive(client: Client) -> None:
 
 
 def test_an_nsga2_runs_front(client: Client) -> None:
-    run = client.run(**TINY, algorithm="nsga2", objectives=["speed", "-cost_of_transport"],
-                     seed=2, sim=TINY_SIM)  # fmt: skip
+    run = client.run(
+        **TINY, algorithm="nsga2", objectives=["speed", "-cost_of_transport"], seed=2, sim=TINY_SIM
+    )
     assert run.wait(timeout=120)["status"] == "completed"
     front = run.front(robots=True)
     assert front["points"] and front["objectives"][1]["goal"] == "min"
@@ -154,8 +155,11 @@ def test_importing_the_client_loads_no_engine() -> None:
         "or m.startswith(('softevo.core', 'softevo.api'))))"
     )
     done = subprocess.run(
-        [sys.executable, "-P", "-c", check], capture_output=True, text=True, timeout=60,
+        [sys.executable, "-P", "-c", check],
+        capture_output=True,
+        text=True,
+        timeout=60,
         cwd=Path(__file__).parent,
-    )  # fmt: skip
+    )
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "[]"

@@ -47,9 +47,12 @@ def test_the_client_and_library_sections_are_there() -> None:
 @pytest.mark.parametrize("heading", sorted(sections()))
 def test_a_sections_code_runs(heading: str, tmp_path: Path) -> None:
     done = subprocess.run(
-        [sys.executable, "-P", "-c", sections()[heading]], cwd=tmp_path, capture_output=True,
-        text=True, timeout=300,
-    )  # fmt: skip
+        [sys.executable, "-P", "-c", sections()[heading]],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert done.returncode == 0, f"docs/python.md, {heading}:\n{done.stdout}\n{done.stderr}"
     for words in PRINTS.get(heading, []):
         assert words in done.stdout, f"{heading} did not print {words!r}:\n{done.stdout}"

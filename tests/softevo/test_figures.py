@@ -17,9 +17,16 @@ def curve(n: int = 6, best: float = 0.1) -> list[dict[str, Any]]:
     rows = []
     for g in range(n):
         rows.append(
-            {"generation": g, "best": best + 0.01 * g, "mean": 0.05, "median": 0.04,
-             "best_so_far": best + 0.01 * g, "diversity": 0.5 - 0.05 * g, "evaluations": 5}
-        )  # fmt: skip
+            {
+                "generation": g,
+                "best": best + 0.01 * g,
+                "mean": 0.05,
+                "median": 0.04,
+                "best_so_far": best + 0.01 * g,
+                "diversity": 0.5 - 0.05 * g,
+                "evaluations": 5,
+            }
+        )
     return rows
 
 
@@ -81,8 +88,9 @@ def test_run_curves_give_each_seed_a_colour_an_entry_and_whole_generations() -> 
     assert [line.get_label() for line in lines] == ["paper-cube, seed 1", "paper-cube, seed 2"]
     assert lines[0].get_color() != lines[1].get_color()
     assert [t.get_text() for t in axes.get_legend().get_texts()] == [
-        "paper-cube, seed 1", "paper-cube, seed 2",
-    ]  # fmt: skip
+        "paper-cube, seed 1",
+        "paper-cube, seed 2",
+    ]
     figure.canvas.draw()
     assert all(float(t).is_integer() for t in axes.get_xticks())
     several = curves_figure(

@@ -46,9 +46,22 @@ def test_map_elites_without_a_map_takes_the_presets(tmp_path: Path) -> None:
     assert one.bins == (8,)
     out = tmp_path / "qd"
     done = softevo(
-        "run", "--preset", "quick", "--algorithm", "map-elites", "--population", "4",
-        "--generations", "1", "--shape", "2x2x2", "--duration", "1", "--out", str(out),
-    )  # fmt: skip
+        "run",
+        "--preset",
+        "quick",
+        "--algorithm",
+        "map-elites",
+        "--population",
+        "4",
+        "--generations",
+        "1",
+        "--shape",
+        "2x2x2",
+        "--duration",
+        "1",
+        "--out",
+        str(out),
+    )
     assert done.returncode == 0, done.stderr
     archive = json.loads((out / "archive.json").read_text())
     assert archive["descriptors"] == ["voxels", "actuated"] and archive["bins"] == [8, 8]

@@ -21,13 +21,21 @@ def installed(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_the_wheel_is_what_runs_and_carries_the_guides(installed: Path, tmp_path: Path) -> None:
     where = subprocess.run(
         [str(installed / "bin" / "python"), "-c", "import softevo; print(softevo.__file__)"],
-        check=True, capture_output=True, text=True, cwd=tmp_path, env=clean_env(),
-    ).stdout.strip()  # fmt: skip
+        check=True,
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        env=clean_env(),
+    ).stdout.strip()
     assert where.startswith(str(installed)), where  # the wheel's softevo, not the checkout's
     guide = subprocess.run(
         [str(installed / "bin" / "softevo"), "docs", "tasks"],
-        capture_output=True, text=True, cwd=tmp_path, env=clean_env(), timeout=60,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        env=clean_env(),
+        timeout=60,
+    )
     assert guide.returncode == 0 and guide.stdout.startswith("# Tasks"), guide.stderr
 
 

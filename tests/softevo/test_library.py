@@ -28,9 +28,23 @@ TINY = {"population": 6, "generations": 3, "seed": 4, "sim": {"duration": 1.0}}
 def test_evolve_gives_the_curve_and_files_of_softevo_run(tmp_path: Path) -> None:
     out = tmp_path / "run"
     done = softevo(
-        "run", "--preset", "quick", "--population", "6", "--generations", "3", "--seed", "4",
-        "--duration", "1", "--workers", "1", "--out", str(out), "--json",
-    )  # fmt: skip
+        "run",
+        "--preset",
+        "quick",
+        "--population",
+        "6",
+        "--generations",
+        "3",
+        "--seed",
+        "4",
+        "--duration",
+        "1",
+        "--workers",
+        "1",
+        "--out",
+        str(out),
+        "--json",
+    )
     assert done.returncode == 0, done.stderr
     printed = json.loads(done.stdout)
     result = library.evolve(preset="quick", workers=1, **TINY)
@@ -91,9 +105,13 @@ def test_overrides_merge_with_the_config_sim_key_by_key() -> None:
 
 def test_a_map_elites_run_gives_its_archive(tmp_path: Path) -> None:
     result = library.evolve(
-        preset="quick", algorithm="map-elites", descriptors=["voxels", "actuated"], bins=[4, 3],
-        workers=1, **TINY,
-    )  # fmt: skip
+        preset="quick",
+        algorithm="map-elites",
+        descriptors=["voxels", "actuated"],
+        bins=[4, 3],
+        workers=1,
+        **TINY,
+    )
     assert result.archive is not None and result.archive["bins"] == [4, 3]
     filled = len(result.archive["elites"])
     assert filled > 0 and result.curve[-1]["coverage"] == filled / 12

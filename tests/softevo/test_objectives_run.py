@@ -17,8 +17,14 @@ from softevo.core.search.vectors import objective_values, reference_point
 from softevo.results import read_results
 from tests.softevo.inprocess import softevo
 
-SMALL = {"preset": "quick", "shape": [2, 2, 2], "population": 6, "generations": 3,
-         "sim": {"duration": 1.0}, "seed": 3}  # fmt: skip
+SMALL = {
+    "preset": "quick",
+    "shape": [2, 2, 2],
+    "population": 6,
+    "generations": 3,
+    "sim": {"duration": 1.0},
+    "seed": 3,
+}
 OBJECTIVES = ["speed", "-cost_of_transport"]
 
 
@@ -49,10 +55,25 @@ def test_a_run_without_objectives_measures_no_energy_and_keeps_its_columns() -> 
 def test_softevo_run_writes_the_pareto_columns(tmp_path: Path) -> None:
     out = tmp_path / "run"
     done = softevo(
-        "run", "--preset", "quick", "--shape", "2x2x2", "--population", "6", "--generations",
-        "2", "--duration", "1", "--algorithm", "afpo", "--objectives=speed,-cost_of_transport",
-        "--workers", "1", "--out", str(out),
-    )  # fmt: skip
+        "run",
+        "--preset",
+        "quick",
+        "--shape",
+        "2x2x2",
+        "--population",
+        "6",
+        "--generations",
+        "2",
+        "--duration",
+        "1",
+        "--algorithm",
+        "afpo",
+        "--objectives=speed,-cost_of_transport",
+        "--workers",
+        "1",
+        "--out",
+        str(out),
+    )
     assert done.returncode == 0, done.stderr
     with (out / "curve.csv").open(encoding="utf-8") as handle:
         rows = list(csv.DictReader(handle))
@@ -74,9 +95,21 @@ def test_softevo_run_writes_the_pareto_columns(tmp_path: Path) -> None:
 
 
 def test_softevo_run_resumed_gives_the_same_curve_and_front(tmp_path: Path) -> None:
-    flags = ["--preset", "quick", "--shape", "2x2x2", "--population", "6", "--duration", "1",
-             "--algorithm", "afpo", "--objectives=speed,-cost_of_transport",
-             "--workers", "1"]  # fmt: skip
+    flags = [
+        "--preset",
+        "quick",
+        "--shape",
+        "2x2x2",
+        "--population",
+        "6",
+        "--duration",
+        "1",
+        "--algorithm",
+        "afpo",
+        "--objectives=speed,-cost_of_transport",
+        "--workers",
+        "1",
+    ]
     whole, part = tmp_path / "whole", tmp_path / "part"
     assert softevo("run", *flags, "--generations", "4", "--out", str(whole)).returncode == 0
     assert softevo("run", *flags, "--generations", "2", "--out", str(part)).returncode == 0

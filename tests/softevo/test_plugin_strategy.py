@@ -28,8 +28,15 @@ from tests.softevo.inprocess import softevo
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "evolution.md"
 NAME = "elite-mutants"
-RUN = {"preset": "quick", "algorithm": NAME, "options": {"keep": 3}, "population": 6,
-       "generations": 3, "seed": 4, "sim": {"duration": 1.0}}  # fmt: skip
+RUN = {
+    "preset": "quick",
+    "algorithm": NAME,
+    "options": {"keep": 3},
+    "population": 6,
+    "generations": 3,
+    "seed": 4,
+    "sim": {"duration": 1.0},
+}
 
 
 def section(heading: str, language: str) -> str:
@@ -67,8 +74,11 @@ def environment(site: Path) -> dict[str, str]:
 def test_it_is_listed_by_softevo_algorithms_in_a_new_process(site: Path) -> None:
     done = subprocess.run(
         [sys.executable, "-m", "softevo.cli", "algorithms", "--json"],
-        capture_output=True, text=True, env=environment(site), timeout=60,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        env=environment(site),
+        timeout=60,
+    )
     assert done.returncode == 0, done.stderr
     listed = {entry["name"]: entry for entry in json.loads(done.stdout)}
     assert {"ga", "random", "hillclimb", "map-elites", NAME} <= set(listed)
@@ -79,10 +89,27 @@ def test_it_is_listed_by_softevo_algorithms_in_a_new_process(site: Path) -> None
 def test_cli_library_and_service_give_one_curve(site: Path, tmp_path: Path) -> None:
     out = tmp_path / "run"
     done = softevo(
-        "run", "--preset", "quick", "--algorithm", NAME, "--options", '{"keep": 3}',
-        "--population", "6", "--generations", "3", "--seed", "4", "--duration", "1",
-        "--workers", "1", "--out", str(out), "--json",
-    )  # fmt: skip
+        "run",
+        "--preset",
+        "quick",
+        "--algorithm",
+        NAME,
+        "--options",
+        '{"keep": 3}',
+        "--population",
+        "6",
+        "--generations",
+        "3",
+        "--seed",
+        "4",
+        "--duration",
+        "1",
+        "--workers",
+        "1",
+        "--out",
+        str(out),
+        "--json",
+    )
     assert done.returncode == 0, done.stderr
     cli = json.loads(done.stdout)["generations"]
     result = library.evolve(RUN, workers=1)
@@ -131,10 +158,19 @@ def test_the_service_on_rq_runs_it_to_the_same_curve(
     workers.start("plain")
     workers.wait_ready("plain")
     done = subprocess.run(
-        [sys.executable, "-c", API_ON_RQ, str(tmp_path / "api.db"), redis_server.url,
-         json.dumps(RUN)],
-        capture_output=True, text=True, env=environment(site), timeout=150,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-c",
+            API_ON_RQ,
+            str(tmp_path / "api.db"),
+            redis_server.url,
+            json.dumps(RUN),
+        ],
+        capture_output=True,
+        text=True,
+        env=environment(site),
+        timeout=150,
+    )
     assert done.returncode == 0, done.stderr[-3000:]
     served = json.loads(done.stdout.strip().splitlines()[-1])
     assert served["workers"] == ["plain"]

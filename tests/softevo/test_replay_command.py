@@ -36,9 +36,15 @@ def frames(path: Path) -> list[np.ndarray]:
 def test_gif_has_fps_times_duration_frames_of_the_size(examples: Path, tmp_path: Path) -> None:
     out = tmp_path / "crawl.gif"
     done = softevo(
-        "replay", str(examples / "crawler_4x4x4.json"), "--out", str(out),
-        "--fps", "5", "--duration", "1.6",
-    )  # fmt: skip
+        "replay",
+        str(examples / "crawler_4x4x4.json"),
+        "--out",
+        str(out),
+        "--fps",
+        "5",
+        "--duration",
+        "1.6",
+    )
     assert done.returncode == 0, done.stderr
     assert done.stderr.strip() == f"{out}: gif, {out.stat().st_size} bytes"
     with Image.open(out) as image:
@@ -72,17 +78,25 @@ def test_out_of_range_fps_or_duration_is_one_line(
     examples: Path, tmp_path: Path, option: str, value: str, said: str
 ) -> None:
     done = softevo(
-        "replay", str(examples / "crawler_4x4x4.json"), "--out", str(tmp_path / "a.gif"),
-        option, value,
-    )  # fmt: skip
+        "replay",
+        str(examples / "crawler_4x4x4.json"),
+        "--out",
+        str(tmp_path / "a.gif"),
+        option,
+        value,
+    )
     assert done.returncode == 2 and said in done.stderr and done.stderr.count("\n") == 1
 
 
 def test_non_positive_fps_is_a_usage_error(examples: Path, tmp_path: Path) -> None:
     done = softevo(
-        "replay", str(examples / "crawler_4x4x4.json"), "--out", str(tmp_path / "a.gif"),
-        "--fps", "0",
-    )  # fmt: skip
+        "replay",
+        str(examples / "crawler_4x4x4.json"),
+        "--out",
+        str(tmp_path / "a.gif"),
+        "--fps",
+        "0",
+    )
     assert done.returncode == 2 and "--fps" in done.stderr
 
 
@@ -115,16 +129,36 @@ def test_mp4_with_ffmpeg_has_the_frames_and_size_asked_for(examples: Path, tmp_p
         pytest.skip("ffmpeg is not installed (apt-get install ffmpeg)")
     out = tmp_path / "crawl.mp4"
     done = softevo(
-        "replay", str(examples / "crawler_4x4x4.json"), "--out", str(out), "--fps", "10",
-        "--duration", "1.2",
-    )  # fmt: skip
+        "replay",
+        str(examples / "crawler_4x4x4.json"),
+        "--out",
+        str(out),
+        "--fps",
+        "10",
+        "--duration",
+        "1.2",
+    )
     assert done.returncode == 0, done.stderr
     assert out.read_bytes()[4:8] == b"ftyp"
     probe = subprocess.run(
-        ["ffprobe", "-v", "error", "-count_frames", "-select_streams", "v:0", "-show_entries",
-         "stream=nb_read_frames,width,height", "-of", "json", str(out)],
-        capture_output=True, text=True, check=True, timeout=60,
-    )  # fmt: skip
+        [
+            "ffprobe",
+            "-v",
+            "error",
+            "-count_frames",
+            "-select_streams",
+            "v:0",
+            "-show_entries",
+            "stream=nb_read_frames,width,height",
+            "-of",
+            "json",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=60,
+    )
     (stream,) = json.loads(probe.stdout)["streams"]
     assert int(stream["nb_read_frames"]) == 12
     assert (stream["width"], stream["height"]) == picture.SIZE

@@ -19,18 +19,37 @@ import pytest
 from tests.softevo.installed import clean_env, install_wheel
 
 FIGURES = [
-    "fig4a_boxes.png", "fig4b_curve.png", "fig4c_population.png", "fig4d_diversity.png",
-    "phase1_breathing_cube.png", "phase2_cube.png", "baselines.png", "encodings.png",
-    "ablation.png", "ablation_curves.png", "clock.png",
-]  # fmt: skip
+    "fig4a_boxes.png",
+    "fig4b_curve.png",
+    "fig4c_population.png",
+    "fig4d_diversity.png",
+    "phase1_breathing_cube.png",
+    "phase2_cube.png",
+    "baselines.png",
+    "encodings.png",
+    "ablation.png",
+    "ablation_curves.png",
+    "clock.png",
+]
 
 
 def reproduce(out: Path, *flags: str) -> subprocess.CompletedProcess[str]:
     done = subprocess.run(
-        [sys.executable, "-P", "-m", "softevo.cli", "reproduce", "--quick", "--out", str(out),
-         *flags],
-        capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-P",
+            "-m",
+            "softevo.cli",
+            "reproduce",
+            "--quick",
+            "--out",
+            str(out),
+            *flags,
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert done.returncode == 0, done.stdout + done.stderr
     return done
 
@@ -42,10 +61,21 @@ def results(tmp_path_factory: pytest.TempPathFactory) -> Path:
     venv = install_wheel(tmp_path_factory.mktemp("installed"))
     out, elsewhere = tmp_path_factory.mktemp("reproduce"), tmp_path_factory.mktemp("cwd")
     done = subprocess.run(
-        [str(venv / "bin" / "softevo"), "reproduce", "--quick", "--workers", "1", "--out",
-         str(out)],
-        capture_output=True, text=True, cwd=elsewhere, env=clean_env(), timeout=600,
-    )  # fmt: skip
+        [
+            str(venv / "bin" / "softevo"),
+            "reproduce",
+            "--quick",
+            "--workers",
+            "1",
+            "--out",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        cwd=elsewhere,
+        env=clean_env(),
+        timeout=600,
+    )
     assert done.returncode == 0, done.stdout + done.stderr
     return out
 
@@ -66,8 +96,11 @@ def test_every_table_and_figure_is_written(results: Path) -> None:
     with (results / "champions.csv").open() as handle:
         champions = list(csv.DictReader(handle))
     assert [(row["experiment"], row["shape"]) for row in champions] == [
-        ("boxes", "2x2x2"), ("boxes", "3x2x2"), ("clock", "2x2x2"), ("clock", "3x2x2"),
-    ]  # fmt: skip
+        ("boxes", "2x2x2"),
+        ("boxes", "3x2x2"),
+        ("clock", "2x2x2"),
+        ("clock", "3x2x2"),
+    ]
     for row in champions:
         assert float(row["speed_1x"]) == float(row["stored_best"])
         table = {r["shape"]: r for r in rows(results) if r["experiment"] == row["experiment"]}

@@ -20,8 +20,12 @@ def test_the_objectives_suite_reads_every_method_at_one_budget(tmp_path: Path) -
     assert main(["reproduce", "--objectives", "--quick", "--out", str(tmp_path)]) == 0
     trade = _rows(tmp_path / "tradeoff.csv")
     assert [r["method"] for r in trade] == [
-        "NSGA-II", "GA w=0.25", "GA w=0.5", "GA w=0.75", "random search"
-    ]  # fmt: skip
+        "NSGA-II",
+        "GA w=0.25",
+        "GA w=0.5",
+        "GA w=0.75",
+        "random search",
+    ]
     budget = max(float(r["simulations_mean"]) for r in trade if r["method"].startswith("GA"))
     for row in trade:  # at most the weighted GAs' simulations, a front, a volume
         assert 0 < float(row["simulations_mean"]) <= budget

@@ -15,8 +15,10 @@ def test_the_qd_suite_compares_the_three_variants_on_the_gas_budget(tmp_path: Pa
     with (tmp_path / "qd.csv").open() as handle:
         rows = list(csv.DictReader(handle))
     assert [(r["box"], r["variant"]) for r in rows] == [
-        ("2x2x2", "ga"), ("2x2x2", "map-elites"), ("2x2x2", "voxel-phase")
-    ]  # fmt: skip
+        ("2x2x2", "ga"),
+        ("2x2x2", "map-elites"),
+        ("2x2x2", "voxel-phase"),
+    ]
     ga, elites, _ = rows
     assert 0 < float(elites["simulations_mean"]) <= float(ga["simulations_mean"])  # its budget
     for row in rows:

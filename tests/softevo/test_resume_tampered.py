@@ -24,9 +24,20 @@ def finished(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A finished 2-generation run of 8 small robots, resumed to 3 generations in the tests."""
     out = tmp_path_factory.mktemp("run") / "run"
     done = softevo(
-        "run", "--preset", "quick", "--population", "8", "--generations", "2",
-        "--shape", "2x2x2", "--duration", "0.6", "--out", str(out),
-    )  # fmt: skip
+        "run",
+        "--preset",
+        "quick",
+        "--population",
+        "8",
+        "--generations",
+        "2",
+        "--shape",
+        "2x2x2",
+        "--duration",
+        "0.6",
+        "--out",
+        str(out),
+    )
     assert done.returncode == 0, done.stderr
     return out
 
@@ -131,8 +142,10 @@ def test_a_tampered_folder_is_refused_in_one_line(
     if isinstance(change, tuple):
         (folder / change[0]).write_text(change[1])
     else:
-        files = {name: json.loads((folder / f"{name}.json").read_text()) for name in
-                 ("config", "state", "cache")}  # fmt: skip
+        files = {
+            name: json.loads((folder / f"{name}.json").read_text())
+            for name in ("config", "state", "cache")
+        }
         change(files)
         for name, data in files.items():
             (folder / f"{name}.json").write_text(json.dumps(data))
@@ -166,20 +179,29 @@ def _directory(folder: Path) -> None:
 
 
 STORE_CASES: dict[str, tuple[Callable[[Path], None], str]] = {
-    "config.json edited": (_write("config.json", '{"preset": "quick"}'),
-                           "config.json: not the config of the run"),
-    "run.db garbled": (_write("run.db", "not a database " * 100),
-                       "run.db: not a `softevo run` store"),
+    "config.json edited": (
+        _write("config.json", '{"preset": "quick"}'),
+        "config.json: not the config of the run",
+    ),
+    "run.db garbled": (
+        _write("run.db", "not a database " * 100),
+        "run.db: not a `softevo run` store",
+    ),
     "run.db a folder": (_directory, "run.db: not a file"),
-    "run.db of a newer release": (_sql("UPDATE alembic_version SET version_num = '9999'"),
-                                  "run.db: written by another release"),
+    "run.db of a newer release": (
+        _sql("UPDATE alembic_version SET version_num = '9999'"),
+        "run.db: written by another release",
+    ),
     "run.db of another program": (_sql("DROP TABLE alembic_version"), "holds other tables"),
-    "state without a seed": (_sql("""UPDATE runs SET ga_state = '{"x": 1}'"""),
-                             "run.db: not a run to go on with"),
+    "state without a seed": (
+        _sql("""UPDATE runs SET ga_state = '{"x": 1}'"""),
+        "run.db: not a run to go on with",
+    ),
     "config a word for a count": (
         _sql("""UPDATE runs SET config = json_set(config, '$.population', 'many')"""),
-        "run.db: population"),
-}  # fmt: skip
+        "run.db: population",
+    ),
+}
 
 
 @pytest.mark.parametrize("case", list(STORE_CASES))

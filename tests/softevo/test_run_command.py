@@ -28,9 +28,21 @@ from tests.softevo.inprocess import softevo
 def test_run_writes_results_and_prints_json(tmp_path: Path) -> None:
     out = tmp_path / "run"
     done = softevo(
-        "run", "--preset", "quick", "--generations", "4", "--population", "8",
-        "--seed", "5", "--workers", "1", "--out", str(out), "--json",
-    )  # fmt: skip
+        "run",
+        "--preset",
+        "quick",
+        "--generations",
+        "4",
+        "--population",
+        "8",
+        "--seed",
+        "5",
+        "--workers",
+        "1",
+        "--out",
+        str(out),
+        "--json",
+    )
     assert done.returncode == 0, done.stderr
     result = json.loads(done.stdout)
     rows = result["generations"]
@@ -45,9 +57,21 @@ def test_run_writes_results_and_prints_json(tmp_path: Path) -> None:
     assert best.shape == (3, 3, 3)
     assert result["best"]["speed"] == rows[-1]["best_so_far"]
     again = softevo(
-        "run", "--preset", "quick", "--generations", "4", "--population", "8",
-        "--seed", "5", "--workers", "2", "--out", str(tmp_path / "again"), "--json",
-    )  # fmt: skip
+        "run",
+        "--preset",
+        "quick",
+        "--generations",
+        "4",
+        "--population",
+        "8",
+        "--seed",
+        "5",
+        "--workers",
+        "2",
+        "--out",
+        str(tmp_path / "again"),
+        "--json",
+    )
     assert json.loads(again.stdout)["generations"] == rows
     # every individual, and the figures
     with (out / "population.csv").open() as handle:
@@ -118,9 +142,23 @@ def _signals(pid: int) -> str:
 
 def test_ctrl_c_stops_cleanly_and_keeps_partial_results(tmp_path: Path) -> None:
     out = tmp_path / "interrupted"
-    command = [sys.executable, "-P", "-c", AS_A_SHELL_STARTS_IT, sys.executable, "-P", "-m",
-               "softevo.cli", "run", "--preset", "paper-voxel", "--workers", "2", "--out",
-               str(out)]  # fmt: skip
+    command = [
+        sys.executable,
+        "-P",
+        "-c",
+        AS_A_SHELL_STARTS_IT,
+        sys.executable,
+        "-P",
+        "-m",
+        "softevo.cli",
+        "run",
+        "--preset",
+        "paper-voxel",
+        "--workers",
+        "2",
+        "--out",
+        str(out),
+    ]
     process = subprocess.Popen(
         command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True
     )
@@ -236,8 +274,10 @@ def test_a_store_that_cannot_write_is_said_in_one_line(
     done = softevo("run", *SMALL, "--shape", "2x2x2", "--generations", "2", "--out", str(out))
     assert done.returncode == 1 and "Traceback" not in done.stderr
     said = done.stderr.strip().splitlines()[-1]
-    assert said == (f"softevo run: error: {out}/run.db: database or disk is full; what was "
-                    f"committed is kept, go on with: softevo run --resume {out}")  # fmt: skip
+    assert said == (
+        f"softevo run: error: {out}/run.db: database or disk is full; what was "
+        f"committed is kept, go on with: softevo run --resume {out}"
+    )
     monkeypatch.undo()
     resumed = softevo("run", "--resume", str(out), "--json")
     assert resumed.returncode == 0 and len(json.loads(resumed.stdout)["generations"]) == 2

@@ -17,16 +17,44 @@ from tests.softevo.inprocess import softevo
 def test_a_heading_run_writes_its_archive_with_the_heading_axis(tmp_path: Path) -> None:
     out = tmp_path / "heading"
     done = softevo(
-        "run", "--preset", "quick", "--algorithm", "map-elites", "--descriptors",
-        "heading,voxels", "--bins", "8,4", "--generations", "3", "--population", "8",
-        "--duration", "1", "--seed", "2", "--workers", "1", "--out", str(out),
-    )  # fmt: skip
+        "run",
+        "--preset",
+        "quick",
+        "--algorithm",
+        "map-elites",
+        "--descriptors",
+        "heading,voxels",
+        "--bins",
+        "8,4",
+        "--generations",
+        "3",
+        "--population",
+        "8",
+        "--duration",
+        "1",
+        "--seed",
+        "2",
+        "--workers",
+        "1",
+        "--out",
+        str(out),
+    )
     assert done.returncode == 0, done.stderr
     archive = json.loads((out / "archive.json").read_text())
-    expected = Evolution.start(resolve({
-        "preset": "quick", "algorithm": "map-elites", "descriptors": ["heading", "voxels"],
-        "bins": [8, 4], "generations": 3, "population": 8, "seed": 2, "sim": {"duration": 1.0},
-    }))  # fmt: skip
+    expected = Evolution.start(
+        resolve(
+            {
+                "preset": "quick",
+                "algorithm": "map-elites",
+                "descriptors": ["heading", "voxels"],
+                "bins": [8, 4],
+                "generations": 3,
+                "population": 8,
+                "seed": 2,
+                "sim": {"duration": 1.0},
+            }
+        )
+    )
     expected.run(SerialEvaluator())
     assert archive == expected.state.archive.to_json() and archive["elites"]
     with (out / "archive.csv").open() as handle:
@@ -45,8 +73,15 @@ def test_help_and_a_bad_name_list_the_catalogue_with_heading(tmp_path: Path) -> 
     shown = softevo("run", "--help")
     assert "heading [-180, 180]" in " ".join(shown.stdout.split())
     done = softevo(
-        "run", "--algorithm", "map-elites", "--descriptors", "drift", "--bins", "4",
-        "--out", str(tmp_path),
-    )  # fmt: skip
+        "run",
+        "--algorithm",
+        "map-elites",
+        "--descriptors",
+        "drift",
+        "--bins",
+        "4",
+        "--out",
+        str(tmp_path),
+    )
     assert done.returncode != 0
     assert "known: voxels, actuated, soft, height, heading" in done.stderr

@@ -15,16 +15,45 @@ from tests.softevo.inprocess import softevo
 def test_a_map_elites_run_writes_its_archive_and_heat_map(tmp_path: Path) -> None:
     out = tmp_path / "qd"
     done = softevo(
-        "run", "--preset", "quick", "--algorithm", "map-elites", "--descriptors",
-        "voxels,soft", "--bins", "5,4", "--generations", "3", "--population", "8",
-        "--duration", "1", "--seed", "2", "--workers", "1", "--out", str(out), "--json",
-    )  # fmt: skip
+        "run",
+        "--preset",
+        "quick",
+        "--algorithm",
+        "map-elites",
+        "--descriptors",
+        "voxels,soft",
+        "--bins",
+        "5,4",
+        "--generations",
+        "3",
+        "--population",
+        "8",
+        "--duration",
+        "1",
+        "--seed",
+        "2",
+        "--workers",
+        "1",
+        "--out",
+        str(out),
+        "--json",
+    )
     assert done.returncode == 0, done.stderr
     archive = json.loads((out / "archive.json").read_text())
-    expected = Evolution.start(resolve({
-        "preset": "quick", "algorithm": "map-elites", "descriptors": ["voxels", "soft"],
-        "bins": [5, 4], "generations": 3, "population": 8, "seed": 2, "sim": {"duration": 1.0},
-    }))  # fmt: skip
+    expected = Evolution.start(
+        resolve(
+            {
+                "preset": "quick",
+                "algorithm": "map-elites",
+                "descriptors": ["voxels", "soft"],
+                "bins": [5, 4],
+                "generations": 3,
+                "population": 8,
+                "seed": 2,
+                "sim": {"duration": 1.0},
+            }
+        )
+    )
     expected.run(SerialEvaluator())
     assert archive == expected.state.archive.to_json()
     with (out / "archive.csv").open() as handle:
@@ -41,9 +70,16 @@ def test_a_map_elites_run_writes_its_archive_and_heat_map(tmp_path: Path) -> Non
 
 def test_bad_bins_are_a_usage_error_naming_them(tmp_path: Path) -> None:
     done = softevo(
-        "run", "--algorithm", "map-elites", "--descriptors", "voxels", "--bins", "ten",
-        "--out", str(tmp_path),
-    )  # fmt: skip
+        "run",
+        "--algorithm",
+        "map-elites",
+        "--descriptors",
+        "voxels",
+        "--bins",
+        "ten",
+        "--out",
+        str(tmp_path),
+    )
     assert done.returncode == 2 and "--bins" in done.stderr and "ten" in done.stderr
     done = softevo("run", "--algorithm", "map-elites", "--bins", "4,4,4", "--out", str(tmp_path))
     assert (

@@ -14,10 +14,21 @@ from softevo.core.config import resolve
 from softevo.results import POPULATION_COLUMNS, read_results
 from tests.softevo.inprocess import softevo
 
-SMALL = {"preset": "quick", "population": 6, "generations": 3, "seed": 4, "shape": [2, 2, 2],
-         "sim": {"duration": 1.0}}  # fmt: skip
-HEADING = {**SMALL, "algorithm": "map-elites", "descriptors": ["heading", "voxels"],
-           "bins": [6, 3], "generations": 4}  # fmt: skip
+SMALL = {
+    "preset": "quick",
+    "population": 6,
+    "generations": 3,
+    "seed": 4,
+    "shape": [2, 2, 2],
+    "sim": {"duration": 1.0},
+}
+HEADING = {
+    **SMALL,
+    "algorithm": "map-elites",
+    "descriptors": ["heading", "voxels"],
+    "bins": [6, 3],
+    "generations": 4,
+}
 
 
 def rows_of(out: Path) -> list[dict[str, str]]:

@@ -18,9 +18,20 @@ from tests.softevo.inprocess import softevo
 from tests.softevo.test_run_command import AS_A_SHELL_STARTS_IT
 
 RUN = (
-    "run", "--preset", "quick", "--population", "8", "--shape", "2x2x2", "--seed", "9",
-    "--algorithm", "steady-state", "--options", '{"window": 5}',
-)  # fmt: skip
+    "run",
+    "--preset",
+    "quick",
+    "--population",
+    "8",
+    "--shape",
+    "2x2x2",
+    "--seed",
+    "9",
+    "--algorithm",
+    "steady-state",
+    "--options",
+    '{"window": 5}',
+)
 
 
 def _curve(folder: Path) -> list[dict]:
@@ -42,8 +53,22 @@ def test_ctrl_c_mid_run_then_resume_gives_the_uninterrupted_curve(tmp_path: Path
     whole, stopped = tmp_path / "whole", tmp_path / "stopped"
     long = ("--generations", "40", "--duration", "2")
     assert softevo(*RUN, *long, "--workers", "1", "--out", str(whole)).returncode == 0
-    command = [sys.executable, "-P", "-c", AS_A_SHELL_STARTS_IT, sys.executable, "-P", "-m",
-               "softevo.cli", *RUN, *long, "--workers", "2", "--out", str(stopped)]  # fmt: skip
+    command = [
+        sys.executable,
+        "-P",
+        "-c",
+        AS_A_SHELL_STARTS_IT,
+        sys.executable,
+        "-P",
+        "-m",
+        "softevo.cli",
+        *RUN,
+        *long,
+        "--workers",
+        "2",
+        "--out",
+        str(stopped),
+    ]
     process = subprocess.Popen(
         command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True
     )

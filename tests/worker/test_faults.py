@@ -335,8 +335,10 @@ def seconds_since(moment: datetime, job: Job) -> float:
 
 
 #: the fault tests' own job functions, which a worker runs only when told to
-POISON = [f"--allow-function=tests.worker.poison_job.{f}"
-          for f in ("evaluate_batch", "evaluate_batch_silently")]  # fmt: skip
+POISON = [
+    f"--allow-function=tests.worker.poison_job.{f}"
+    for f in ("evaluate_batch", "evaluate_batch_silently")
+]
 
 
 def start_workers(workers: Workers, *names: str) -> None:
@@ -633,8 +635,13 @@ def test_a_batch_whose_job_raises(redis_server: RedisServer, workers: Workers) -
     assert math.isnan(result.fitness[1])
     assert np.array_equal(result.fitness[[0, 2, 3]], expected, equal_nan=True)
     # One job for the batch, then one per robot, each once: no attempt 2, no loop.
-    assert jobs == ["softevo-raises-0-a1", "softevo-raises-1-a1", "softevo-raises-2-a1",
-                    "softevo-raises-3-a1", "softevo-raises-a1"]  # fmt: skip
+    assert jobs == [
+        "softevo-raises-0-a1",
+        "softevo-raises-1-a1",
+        "softevo-raises-2-a1",
+        "softevo-raises-3-a1",
+        "softevo-raises-a1",
+    ]
 
 
 def test_a_job_that_finishes_without_a_result_is_retried_not_waited_on(
@@ -653,9 +660,15 @@ def test_a_job_that_finishes_without_a_result_is_retried_not_waited_on(
     )
     print(f"\n[f] a job finishing without a result: settled in {elapsed:.2f} s, jobs {jobs}")
     assert np.array_equal(result.fitness[:1], expected) and math.isnan(result.fitness[1])
-    assert jobs == ["softevo-silent-0-a1", "softevo-silent-1-a1", "softevo-silent-1-a2",
-                    "softevo-silent-1-a3", "softevo-silent-a1", "softevo-silent-a2",
-                    "softevo-silent-a3"]  # fmt: skip
+    assert jobs == [
+        "softevo-silent-0-a1",
+        "softevo-silent-1-a1",
+        "softevo-silent-1-a2",
+        "softevo-silent-1-a3",
+        "softevo-silent-a1",
+        "softevo-silent-a2",
+        "softevo-silent-a3",
+    ]
 
 
 def test_a_batch_taken_by_a_worker_paused_while_idle_is_run_elsewhere(

@@ -73,9 +73,15 @@ def test_a_malformed_job_never_stops_a_worker(redis_server: RedisServer, workers
         "rq:job:bad-date",
         mapping={"data": "[1,2]", "created_at": "garbage", "status": "queued", "origin": QUEUE},
     )
-    connection.hset("rq:job:bad-data", mapping={
-        "data": "not json", "created_at": "2026-12-01T00:00:00.000000Z", "status": "queued",
-        "origin": QUEUE})  # fmt: skip
+    connection.hset(
+        "rq:job:bad-data",
+        mapping={
+            "data": "not json",
+            "created_at": "2026-12-01T00:00:00.000000Z",
+            "status": "queued",
+            "origin": QUEUE,
+        },
+    )
     connection.rpush(queue_key, "bad-date", "bad-data")
     workers.start("first")
     workers.wait_ready("first")

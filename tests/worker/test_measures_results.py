@@ -48,14 +48,27 @@ def test_each_records_text_is_kept_as_it_came_and_stored_as_it_is() -> None:
 
 @pytest.mark.parametrize(
     "texts",
-    [['{"speed":0.5,"heading":-135.25,"energy":0.0}', None, None],
-     ['{"speed":0.5,"heading":-135.25}', None, None],
-     ['{"speed":0.5,"heading":-135.25,"energy":NaN}', None, None],
-     ["speed", None, None], [None, None, "{}"], [{"speed": 0.5}, None, None], [None, None],
-     "[]"],
-    ids=["another-value", "a-measure-short", "nan", "not-json", "for-no-record", "not-a-text",
-         "short", "not-a-list"],
-)  # fmt: skip
+    [
+        ['{"speed":0.5,"heading":-135.25,"energy":0.0}', None, None],
+        ['{"speed":0.5,"heading":-135.25}', None, None],
+        ['{"speed":0.5,"heading":-135.25,"energy":NaN}', None, None],
+        ["speed", None, None],
+        [None, None, "{}"],
+        [{"speed": 0.5}, None, None],
+        [None, None],
+        "[]",
+    ],
+    ids=[
+        "another-value",
+        "a-measure-short",
+        "nan",
+        "not-json",
+        "for-no-record",
+        "not-a-text",
+        "short",
+        "not-a-list",
+    ],
+)
 def test_a_result_whose_texts_are_not_its_records_is_malformed(texts: object) -> None:
     assert parse_result(json.dumps({**GOOD, "texts": texts}), 3) is None
 
@@ -71,10 +84,15 @@ def test_an_older_workers_headings_become_records_of_the_heading() -> None:
 
 @pytest.mark.parametrize(
     "change",
-    [{"measures": None}, {"measures": [{}]}, {"measures": [{"speed": "fast"}, None, None]},
-     {"measures": [[0.5], None, None]}, {"measures": "{}"}],
+    [
+        {"measures": None},
+        {"measures": [{}]},
+        {"measures": [{"speed": "fast"}, None, None]},
+        {"measures": [[0.5], None, None]},
+        {"measures": "{}"},
+    ],
     ids=["missing", "short", "not-a-number", "not-an-object", "not-a-list"],
-)  # fmt: skip
+)
 def test_a_result_without_well_formed_records_is_malformed(change: dict) -> None:
     payload = {**GOOD, **change}
     if change.get("measures") is None:

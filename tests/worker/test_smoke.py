@@ -121,9 +121,10 @@ def api_on_redis(redis_url: str, tmp_path, **settings: float):  # type: ignore[n
 
     database = f"sqlite:///{tmp_path / 'api.db'}"
     return TestClient(
-        create_app(Settings(database_url=database, redis_url=redis_url, poll_seconds=0.05,
-                            **settings))  # type: ignore[arg-type]
-    )  # fmt: skip
+        create_app(
+            Settings(database_url=database, redis_url=redis_url, poll_seconds=0.05, **settings)
+        )  # type: ignore[arg-type]
+    )
 
 
 def test_a_replay_with_no_live_worker_is_a_503_not_a_hang(redis_server, tmp_path) -> None:
@@ -179,10 +180,16 @@ def test_a_map_elites_run_on_two_rq_workers_builds_the_serial_archive(
     for name in ("left", "right"):
         workers.wait_ready(name)
     request = {
-        "preset": "quick", "population": 8, "generations": 3, "seed": 5, "shape": [2, 2, 2],
-        "algorithm": "map-elites", "descriptors": descriptors, "bins": [4, 4],
+        "preset": "quick",
+        "population": 8,
+        "generations": 3,
+        "seed": 5,
+        "shape": [2, 2, 2],
+        "algorithm": "map-elites",
+        "descriptors": descriptors,
+        "bins": [4, 4],
         "sim": {"duration": 1.0},
-    }  # fmt: skip
+    }
     serial = Evolution.start(resolve(request))
     serial.run(SerialEvaluator())
     on_rq = Evolution.start(resolve(request))
@@ -208,10 +215,15 @@ def test_nsga2_and_afpo_on_two_rq_workers_give_the_serial_curve_and_front(
     try:
         for algorithm in ("nsga2", "afpo"):
             request = {
-                "preset": "quick", "population": 6, "generations": 3, "seed": 5,
-                "shape": [2, 2, 2], "algorithm": algorithm, "sim": {"duration": 1.0},
+                "preset": "quick",
+                "population": 6,
+                "generations": 3,
+                "seed": 5,
+                "shape": [2, 2, 2],
+                "algorithm": algorithm,
+                "sim": {"duration": 1.0},
                 "objectives": ["speed", "-cost_of_transport"],
-            }  # fmt: skip
+            }
             serial = Evolution.start(resolve(request))
             serial.run(SerialEvaluator())
             on_rq = Evolution.start(resolve(request))

@@ -37,19 +37,31 @@ def get_archive(
     encoding = config.make_encoding()
     cells = [
         ArchiveCell(
-            cell=list(elite.cell), values=list(elite.values), fitness=elite.fitness,
-            generation=elite.generation, index=elite.index,
+            cell=list(elite.cell),
+            values=list(elite.values),
+            fitness=elite.fitness,
+            generation=elite.generation,
+            index=elite.index,
             id=elite.generation * config.population + elite.index,
             robot=robot_to_json(encoding.to_robot(elite.genome, config.sim)) if robots else None,
         )
         for elite in archive.ordered()
-    ]  # fmt: skip
+    ]
     axes = [
-        DescriptorAxis(name=name, low=CATALOGUE[name].low, high=CATALOGUE[name].high, bins=bins,
-                       help=CATALOGUE[name].help)
+        DescriptorAxis(
+            name=name,
+            low=CATALOGUE[name].low,
+            high=CATALOGUE[name].high,
+            bins=bins,
+            help=CATALOGUE[name].help,
+        )
         for name, bins in zip(config.descriptors, config.bins, strict=True)
-    ]  # fmt: skip
+    ]
     return ArchivePublic(
-        run_id=run_id, generations=run.generations_done, descriptors=axes,
-        coverage=archive.coverage, qd_score=archive.qd_score, cells=cells,
-    )  # fmt: skip
+        run_id=run_id,
+        generations=run.generations_done,
+        descriptors=axes,
+        coverage=archive.coverage,
+        qd_score=archive.qd_score,
+        cells=cells,
+    )

@@ -39,16 +39,25 @@ def get_front(
     encoding = config.make_encoding()
     points = [
         FrontPoint(
-            generation=row["generation"], index=row["index"],
-            id=row["generation"] * config.population + row["index"], fitness=row["fitness"],
-            operator=row["operator"], measures=row["measures"],
-            robot=robot_to_json(encoding.to_robot(
-                Genome.from_json(genomes[(row["generation"], row["index"])]), config.sim
-            )) if robots else None,
+            generation=row["generation"],
+            index=row["index"],
+            id=row["generation"] * config.population + row["index"],
+            fitness=row["fitness"],
+            operator=row["operator"],
+            measures=row["measures"],
+            robot=robot_to_json(
+                encoding.to_robot(
+                    Genome.from_json(genomes[(row["generation"], row["index"])]), config.sim
+                )
+            )
+            if robots
+            else None,
         )
         for row in rows
-    ]  # fmt: skip
+    ]
     return FrontPublic(
-        run_id=run_id, generations=run.generations_done,
-        objectives=[spec.model_dump() for spec in config.objectives], points=points,
-    )  # fmt: skip
+        run_id=run_id,
+        generations=run.generations_done,
+        objectives=[spec.model_dump() for spec in config.objectives],
+        points=points,
+    )

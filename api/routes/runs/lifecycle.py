@@ -254,9 +254,13 @@ def get_replay(
     simulated at a time per client: 503 for a second while the first is)."""
     robot, best = best_robot(db, run_id)
     return replay_response(
-        robot, fps, client_address(request), run_id=run_id, fitness=best["fitness"],
+        robot,
+        fps,
+        client_address(request),
+        run_id=run_id,
+        fitness=best["fitness"],
         generation=best["generation"],
-    )  # fmt: skip
+    )
 
 
 _EVENT_ID = re.compile(r"-?[0-9]{1,10}")

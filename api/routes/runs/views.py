@@ -45,9 +45,14 @@ def get_individual_replay(
     config = RunConfig.model_validate(run.config)
     robot = config.make_encoding().to_robot(Genome.from_json(data["genome"]), config.sim)
     return replay_response(
-        robot, fps, client_address(request), run_id=run_id, number=number,
-        generation=data["generation"], fitness=data["fitness"],
-    )  # fmt: skip
+        robot,
+        fps,
+        client_address(request),
+        run_id=run_id,
+        number=number,
+        generation=data["generation"],
+        fitness=data["fitness"],
+    )
 
 
 @router.get(

@@ -16,8 +16,11 @@ from softevo.local_service import service_env, start_service
 @contextlib.contextmanager
 def serve(folder: Path, token: str | None = None) -> Iterator[httpx.Client]:
     """`softevo serve` on a free port with a SQLite file in `folder`; a client for it."""
-    settings = {"database_url": f"sqlite:///{folder / 'softevo.db'}", "workers": "1",
-                "poll_seconds": "0.1"}  # fmt: skip
+    settings = {
+        "database_url": f"sqlite:///{folder / 'softevo.db'}",
+        "workers": "1",
+        "poll_seconds": "0.1",
+    }
     if token:
         settings["api_token"] = token
     with (

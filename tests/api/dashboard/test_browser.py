@@ -340,8 +340,13 @@ def test_the_token_is_asked_for_and_kept(page: Any, tmp_path: Path) -> None:
 def test_a_map_elites_run_shows_its_archive_and_replays_a_picked_elite(
     page: Any, server: httpx.Client
 ) -> None:
-    body = {**SMALL, "algorithm": "map-elites", "descriptors": ["voxels", "actuated"],
-            "bins": [6, 5], "generations": 5}  # fmt: skip
+    body = {
+        **SMALL,
+        "algorithm": "map-elites",
+        "descriptors": ["voxels", "actuated"],
+        "bins": [6, 5],
+        "generations": 5,
+    }
     run_id = server.post("/runs", json=body).json()["id"]
     wait(lambda: server.get(f"/runs/{run_id}").json()["status"] == "completed", 60, "QD run")
     page.goto(f"{page.base}/#/runs/{run_id}")

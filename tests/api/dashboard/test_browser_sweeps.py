@@ -29,8 +29,10 @@ def done(server: httpx.Client) -> Iterator[int]:  # noqa: F811
 
 def wall_time(started: str, finished: str) -> str:
     """The dashboard's words for the seconds between two of the API's timestamps."""
-    zoned = [datetime.fromisoformat(t if t[-1] == "Z" or "+" in t else t + "+00:00")
-             for t in (started, finished)]  # fmt: skip
+    zoned = [
+        datetime.fromisoformat(t if t[-1] == "Z" or "+" in t else t + "+00:00")
+        for t in (started, finished)
+    ]
     exact = max(0.0, (zoned[1] - zoned[0]).total_seconds())
     if exact < 9.95:
         return f"{exact:.1f} s"

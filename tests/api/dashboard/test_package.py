@@ -70,10 +70,22 @@ def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
     skip = shutil.ignore_patterns(".git", "build", "*.egg-info", "__pycache__", "test-artifacts")
     shutil.copytree(ROOT, source, ignore=skip)
     built = subprocess.run(
-        [sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "--no-build-isolation",
-         str(source), "-w", str(tmp_path)],
-        capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "wheel",
+            "-q",
+            "--no-deps",
+            "--no-build-isolation",
+            str(source),
+            "-w",
+            str(tmp_path),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert built.returncode == 0, built.stdout + built.stderr
     (built_wheel,) = tmp_path.glob("softevo-*.whl")
     return built_wheel
@@ -113,10 +125,21 @@ def test_a_wheel_installs_nothing_but_softevo_and_shadows_no_users_package(
     assert top == {"softevo", f"{wheel.name.split('-')[0]}-{wheel.name.split('-')[1]}.dist-info"}
     target, project = tmp_path / "site", tmp_path / "project"
     installed = subprocess.run(
-        [sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--target", str(target),
-         str(wheel)],
-        capture_output=True, text=True, timeout=300,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "install",
+            "-q",
+            "--no-deps",
+            "--target",
+            str(target),
+            str(wheel),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert installed.returncode == 0, installed.stdout + installed.stderr
     for name in ("core", "api"):  # a user's project with packages of these generic names
         (project / name).mkdir(parents=True)
@@ -126,9 +149,13 @@ def test_a_wheel_installs_nothing_but_softevo_and_shadows_no_users_package(
         "print(core.MINE, api.MINE, softevo.core.physics.__file__)"
     )
     done = subprocess.run(
-        [sys.executable, "-c", check], cwd=project, capture_output=True, text=True, timeout=120,
+        [sys.executable, "-c", check],
+        cwd=project,
+        capture_output=True,
+        text=True,
+        timeout=120,
         env={**os.environ, "PYTHONPATH": f"{project}{os.pathsep}{target}"},
-    )  # fmt: skip
+    )
     assert done.returncode == 0, done.stderr
     mine_core, mine_api, physics = done.stdout.split()
     assert (mine_core, mine_api) == ("core", "api")

@@ -29,8 +29,14 @@ def test_energy_and_cost_of_transport_read_with_units() -> None:
     )
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout) == [
-        "32.11 kJ", "12.35 J", "2.5 MJ", DASH, "12.35 J/(N·m) (dimensionless)", DASH, "0.0001235",
-    ]  # fmt: skip
+        "32.11 kJ",
+        "12.35 J",
+        "2.5 MJ",
+        DASH,
+        "12.35 J/(N·m) (dimensionless)",
+        DASH,
+        "0.0001235",
+    ]
 
 
 def run_node(script: str) -> object:

@@ -16,9 +16,20 @@ from softevo.api.store.driving import GenerationCommit
 from tests.api.store.test_measures_store import downgrade
 from tests.api.store.test_store import OWNER, STATS, driven, members
 
-ARCHIVE = {"descriptors": ["voxels"], "bins": [4], "elites": [
-    {"cell": [1], "values": [0.3], "fitness": 0.25, "generation": 0, "index": 2,
-     "genome": {"discrete": [1, 0], "real": []}}]}  # fmt: skip
+ARCHIVE = {
+    "descriptors": ["voxels"],
+    "bins": [4],
+    "elites": [
+        {
+            "cell": [1],
+            "values": [0.3],
+            "fitness": 0.25,
+            "generation": 0,
+            "index": 2,
+            "genome": {"discrete": [1, 0], "real": []},
+        }
+    ],
+}
 
 
 def stored_state(db: Database, run_id: int) -> dict:
@@ -31,8 +42,9 @@ def test_a_commit_writes_the_archive_apart_and_load_puts_it_back(db: Database) -
     run_id = driven(db)
     assert store.archive(db, run_id) is None  # before the first commit
     store.driving.keep_generation(db, run_id, OWNER, 0, members())
-    commit = GenerationCommit(STATS, {"seed": 1}, archive=ARCHIVE, best=(0.25, 0),
-                              upcoming=members("n"))  # fmt: skip
+    commit = GenerationCommit(
+        STATS, {"seed": 1}, archive=ARCHIVE, best=(0.25, 0), upcoming=members("n")
+    )
     store.driving.commit_generation(db, run_id, OWNER, commit)
     assert store.archive(db, run_id) == ARCHIVE
     assert "archive" not in stored_state(db, run_id)

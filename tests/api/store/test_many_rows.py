@@ -14,7 +14,7 @@ from sqlalchemy import Text, cast, select
 
 from softevo.api import store
 from softevo.api.db import Database
-from softevo.api.models import Individual
+from softevo.api.models import IndividualRow
 from softevo.api.store.driving import _INSERT_MEMBER, MEMBER_COLUMNS, Landed
 from tests.api.store.test_store import OWNER, driven
 
@@ -23,24 +23,35 @@ AWKWARD = ["a,b", 'q"uote', "{brace}", "back\\slash", "NULL", "", "ünï ☃", "
 
 def awkward_members() -> list[dict[str, Any]]:
     return [
-        {"genome": {"discrete": [i, -i], "real": [0.1 * i, 1e-300], "tag": text},
-         "genome_hash": f"h{i}{text}"[:32], "operator": text[:32], "parents": [i, i + 1]}
+        {
+            "genome": {"discrete": [i, -i], "real": [0.1 * i, 1e-300], "tag": text},
+            "genome_hash": f"h{i}{text}"[:32],
+            "operator": text[:32],
+            "parents": [i, i + 1],
+        }
         for i, text in enumerate(AWKWARD)
-    ]  # fmt: skip
+    ]
 
 
 def stored(db: Database, run_id: int) -> list[tuple[Any, ...]]:
-    columns = Individual.__table__.c
-    with db.read() as session:
+    columns = IndividualRow.__table__.c
+    with db.read_session() as session:
         rows = session.execute(
             select(
-                columns["index"], cast(columns.genome, Text), columns.genome_hash,
-                columns.operator, cast(columns.parents, Text), columns.status, columns.fitness,
-                cast(columns.measures, Text), columns.eval_seconds, columns.worker,
+                columns["index"],
+                cast(columns.genome, Text),
+                columns.genome_hash,
+                columns.operator,
+                cast(columns.parents, Text),
+                columns.status,
+                columns.fitness,
+                cast(columns.measures, Text),
+                columns.eval_seconds,
+                columns.worker,
             )
             .where(columns.run_id == run_id)
             .order_by(columns["index"])
-        )  # fmt: skip
+        )
         return [tuple(row) for row in rows]
 
 
@@ -56,7 +67,7 @@ def test_many_rows_store_what_one_row_at_a_time_stores(db: Database) -> None:
         Landed({4: 1.0, 5: 0.0}, "w{}", 0.3, {4: {"heading": -180.0}}),
     ]
     one_by_one, at_once = driven(db), driven(db)
-    with db.writing() as connection:  # the members one statement each
+    with db.write_connection() as connection:  # the members one statement each
         for index, member in enumerate(awkward_members()):
             row = {"b_run": one_by_one, "b_generation": 0, "b_index": index}
             row |= {f"b_{column}": member[column] for column in MEMBER_COLUMNS}
@@ -75,9 +86,14 @@ def test_many_rows_store_what_one_row_at_a_time_stores(db: Database) -> None:
     assert json.loads(rows[0][7]) == {"heading": 12.5, "energy": None}  # NaN: null
     assert rows[1][5:8] == ("failed", None, "{}")  # no record: an empty one
     assert rows[6][5:] == ("pending", None, None, None, None)
-    with db.read() as session:  # one timestamp for the call, read back as UTC
-        times = set(session.scalars(select(Individual.evaluated_at).where(
-            Individual.run_id == at_once, Individual.status != "pending")))  # fmt: skip
+    with db.read_session() as session:  # one timestamp for the call, read back as UTC
+        times = set(
+            session.scalars(
+                select(IndividualRow.evaluated_at).where(
+                    IndividualRow.run_id == at_once, IndividualRow.status != "pending"
+                )
+            )
+        )
     (when,) = times
     assert when.utcoffset() == timedelta(0)
     assert abs(datetime.now(UTC) - when) < timedelta(minutes=1)
@@ -90,5 +106,7 @@ def test_a_seconds_figure_that_is_not_finite_is_stored_as_null(db: Database) -> 
     store.driving.keep_generation(db, run_id, OWNER, 0, awkward_members())
     store.driving.save_fitness(db, run_id, OWNER, 0, [Landed({0: 0.5, 1: 0.25}, "w", math.nan)])
     rows = stored(db, run_id)
-    assert [row[5:9] for row in rows[:2]] == [("evaluated", 0.5, "{}", None),
-                                              ("evaluated", 0.25, "{}", None)]  # fmt: skip
+    assert [row[5:9] for row in rows[:2]] == [
+        ("evaluated", 0.5, "{}", None),
+        ("evaluated", 0.25, "{}", None),
+    ]

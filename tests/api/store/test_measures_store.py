@@ -48,11 +48,19 @@ def test_a_record_is_written_with_its_fitness_and_read_back_to_the_bit(db: Datab
     assert fitness[0] == 0.5 and math.isnan(fitness[1]) and set(fitness) == set(measures) == {0, 1}
     assert same(measures[0], RECORD) and measures[1] == {"stable": 0.0}
     store.driving.commit_generation(
-        db, run_id, OWNER,
-        GenerationCommit(STATS, {"seed": 1}, cached={3: 0.5}, cached_measures={3: RECORD},
-                         landed=[Landed({2: 0.25}, "w2", 0.1)], best=(0.5, 0),
-                         upcoming=members("n")),
-    )  # fmt: skip
+        db,
+        run_id,
+        OWNER,
+        GenerationCommit(
+            STATS,
+            {"seed": 1},
+            cached={3: 0.5},
+            cached_measures={3: RECORD},
+            landed=[Landed({2: 0.25}, "w2", 0.1)],
+            best=(0.5, 0),
+            upcoming=members("n"),
+        ),
+    )
     fitness, measures = store.driving.known_fitness(db, run_id, 1)
     assert fitness == {"x0": 0.5, "x1": fitness["x1"], "x2": 0.25, "x3": 0.5}
     assert same(measures["x0"], RECORD) and same(measures["x3"], RECORD)
@@ -62,13 +70,19 @@ def test_a_record_is_written_with_its_fitness_and_read_back_to_the_bit(db: Datab
 
 
 def test_a_record_is_stored_as_json_with_every_value_that_is_not_a_number_null() -> None:
-    text = measures_text({"speed": 0.1, "energy": math.nan, "efficiency": math.inf,
-                          "cost_of_transport": -math.inf})  # fmt: skip
-    assert json.loads(text) == {"speed": 0.1, "energy": None, "efficiency": None,
-                                "cost_of_transport": None}  # fmt: skip
+    text = measures_text(
+        {"speed": 0.1, "energy": math.nan, "efficiency": math.inf, "cost_of_transport": -math.inf}
+    )
+    assert json.loads(text) == {
+        "speed": 0.1,
+        "energy": None,
+        "efficiency": None,
+        "cost_of_transport": None,
+    }
     assert json.loads(measures_text({"speed": 0.1, "energy": math.nan})) == {
-        "speed": 0.1, "energy": None,
-    }  # fmt: skip
+        "speed": 0.1,
+        "energy": None,
+    }
     assert measures_text({}) == measures_text(None) == "{}"
 
 
@@ -89,8 +103,12 @@ def at_revision_0003(db: Database, objective: str) -> int:
     db.upgrade("0003")
     config = resolve({"preset": "quick", "population": 4, "objective": objective})
     run = store.create_run(db, config)
-    rows = [("evaluated", 0.125, EXACT), ("failed", None, None), ("cached", 0.125, EXACT),
-            ("pending", None, None)]  # fmt: skip
+    rows = [
+        ("evaluated", 0.125, EXACT),
+        ("failed", None, None),
+        ("cached", 0.125, EXACT),
+        ("pending", None, None),
+    ]
     with db.engine.begin() as connection:
         for index, (status, fitness, heading) in enumerate(rows):
             connection.execute(
@@ -99,9 +117,15 @@ def at_revision_0003(db: Database, objective: str) -> int:
                     "operator, parents, status, fitness, heading) VALUES (:run, 0, :index, '{}', "
                     ":hash, 'random', '[]', :status, :fitness, :heading)"
                 ),
-                {"run": run.id, "index": index, "hash": f"x{index}", "status": status,
-                 "fitness": fitness, "heading": heading},
-            )  # fmt: skip
+                {
+                    "run": run.id,
+                    "index": index,
+                    "hash": f"x{index}",
+                    "status": status,
+                    "fitness": fitness,
+                    "heading": heading,
+                },
+            )
     return run.id
 
 
@@ -121,8 +145,11 @@ def test_a_database_of_revision_0003_upgrades_with_its_values_intact(
         assert "x3" not in measures  # pending: nothing measured yet
         items, total = store.list_individuals(db, store.get_run(db, run_id), 0, 0, 10)
         assert total == 4 and [item["fitness"] for item in items] == [0.125, None, 0.125, None]
-        assert [item["measures"] for item in items][1:] == [{}, {name: 0.125, "heading": EXACT},
-                                                             None]  # fmt: skip
+        assert [item["measures"] for item in items][1:] == [
+            {},
+            {name: 0.125, "heading": EXACT},
+            None,
+        ]
         downgrade(db, "0003")
         with db.engine.connect() as connection:
             headings = connection.execute(
@@ -142,9 +169,16 @@ def downgrade(db: Database, revision: str) -> None:
         command.downgrade(config, revision)
 
 
-QD_REQUEST = {"preset": "quick", "seed": 3, "population": 8, "generations": 4,
-              "sim": {"duration": 1.0}, "algorithm": "map-elites",
-              "descriptors": ["heading", "actuated"], "bins": [6, 3]}  # fmt: skip
+QD_REQUEST = {
+    "preset": "quick",
+    "seed": 3,
+    "population": 8,
+    "generations": 4,
+    "sim": {"duration": 1.0},
+    "algorithm": "map-elites",
+    "descriptors": ["heading", "actuated"],
+    "bins": [6, 3],
+}
 
 
 class Stopping(SerialEvaluator):

@@ -13,7 +13,7 @@ from sqlalchemy.exc import IntegrityError
 
 from softevo.api import store
 from softevo.api.db import Database
-from softevo.api.models import Generation, Individual
+from softevo.api.models import GenerationRow, IndividualRow
 from softevo.api.store.driving import (
     GenerationCommit,
     GenerationMismatchError,
@@ -30,10 +30,14 @@ OWNER = Lease("owner-a", 30.0)
 
 def members(tag: str = "x") -> list[dict]:
     return [
-        {"genome": {"discrete": [i], "real": []}, "genome_hash": f"{tag}{i}",
-         "operator": "random", "parents": []}
+        {
+            "genome": {"discrete": [i], "real": []},
+            "genome_hash": f"{tag}{i}",
+            "operator": "random",
+            "parents": [],
+        }
         for i in range(4)
-    ]  # fmt: skip
+    ]
 
 
 def driven(db: Database) -> int:
@@ -43,10 +47,10 @@ def driven(db: Database) -> int:
 
 
 def statuses(db: Database, run_id: int) -> dict[int, tuple[str, float | None]]:
-    with db.read() as session:
+    with db.read_session() as session:
         rows = session.execute(
-            select(Individual.index, Individual.status, Individual.fitness).where(
-                Individual.run_id == run_id
+            select(IndividualRow.index, IndividualRow.status, IndividualRow.fitness).where(
+                IndividualRow.run_id == run_id
             )
         )
         return {index: (status, fitness) for index, status, fitness in rows}
@@ -79,17 +83,30 @@ def test_a_fitness_is_written_once_and_nan_is_failed_not_zero(db: Database) -> N
 
 
 STATS = {
-    "generation": 0, "best": 0.5, "mean": 0.3, "median": 0.3, "min": 0.1, "std": 0.1,
-    "best_so_far": 0.5, "diversity": 0.4, "size": 4, "failed": 0, "evaluations": 3, "saved": 1,
-}  # fmt: skip
+    "generation": 0,
+    "best": 0.5,
+    "mean": 0.3,
+    "median": 0.3,
+    "min": 0.1,
+    "std": 0.1,
+    "best_so_far": 0.5,
+    "diversity": 0.4,
+    "size": 4,
+    "failed": 0,
+    "evaluations": 3,
+    "saved": 1,
+}
 
 
 def commit(db: Database, run_id: int, lease: Lease, done: bool, **parts: object) -> None:
     store.driving.commit_generation(
-        db, run_id, lease,
-        GenerationCommit(STATS, {"seed": 1}, cached={3: 0.1}, best=(0.5, 0), done=done,
-                         seconds=1.5, **parts),  # type: ignore[arg-type]
-    )  # fmt: skip
+        db,
+        run_id,
+        lease,
+        GenerationCommit(
+            STATS, {"seed": 1}, cached={3: 0.1}, best=(0.5, 0), done=done, seconds=1.5, **parts
+        ),  # type: ignore[arg-type]
+    )
 
 
 def test_a_commit_writes_the_generation_counters_and_cached_fitness(db: Database) -> None:
@@ -111,12 +128,18 @@ def test_a_commit_writes_what_landed_and_keeps_the_next_generation(db: Database)
     store.driving.save_fitness(db, run_id, OWNER, 0, [Landed({0: 0.5}, "w1", 0.1)])
     landed = [Landed({1: math.nan}, "w1", 0.1), Landed({2: 0.25}, "w2", 0.3)]
     commit(db, run_id, OWNER, done=False, landed=landed, upcoming=members("n"))
-    columns = (Individual.genome_hash, Individual.status, Individual.fitness, Individual.worker)
-    with db.read() as session:
+    columns = (
+        IndividualRow.genome_hash,
+        IndividualRow.status,
+        IndividualRow.fitness,
+        IndividualRow.worker,
+    )
+    with db.read_session() as session:
         rows = session.execute(
-            select(*columns).where(Individual.run_id == run_id)
-            .order_by(Individual.generation, Individual.index)
-        ).all()  # fmt: skip
+            select(*columns)
+            .where(IndividualRow.run_id == run_id)
+            .order_by(IndividualRow.generation, IndividualRow.index)
+        ).all()
     assert [tuple(row) for row in rows[:4]] == [
         ("x0", IndividualStatus.EVALUATED, 0.5, "w1"),
         ("x1", IndividualStatus.FAILED, None, "w1"),
@@ -137,8 +160,8 @@ def test_the_last_commit_keeps_no_next_generation(db: Database) -> None:
     store.driving.keep_generation(db, run_id, OWNER, 0, members())
     commit(db, run_id, OWNER, done=True, upcoming=members("n"))
     assert store.get_run(db, run_id).status == RunStatus.COMPLETED
-    with db.read() as session:
-        assert session.scalar(select(func.max(Individual.generation))) == 0
+    with db.read_session() as session:
+        assert session.scalar(select(func.max(IndividualRow.generation))) == 0
 
 
 def test_a_commit_is_all_or_nothing(db: Database) -> None:
@@ -149,8 +172,8 @@ def test_a_commit_is_all_or_nothing(db: Database) -> None:
         commit(db, run_id, OWNER, done=True)
     record = store.get_run(db, run_id)
     assert record.status == RunStatus.RUNNING and record.evaluations == 3  # not 6
-    with db.read() as session:
-        assert session.scalar(select(func.count()).select_from(Generation)) == 1
+    with db.read_session() as session:
+        assert session.scalar(select(func.count()).select_from(GenerationRow)) == 1
 
 
 def test_a_coordinator_that_lost_its_lease_writes_nothing(db: Database) -> None:

@@ -31,11 +31,19 @@ from softevo.core.robots.settings import sim_settings
 
 #: 3 x 2 x 2, every material, one empty corner; labels x fastest, then y, then z.
 MIXED = (
-    "soft", "hard", "sine",
-    "neg_sine", "soft", "empty",
-    "hard", "hard", "sine",
-    "soft", "neg_sine", "hard",
-)  # fmt: skip
+    "soft",
+    "hard",
+    "sine",
+    "neg_sine",
+    "soft",
+    "empty",
+    "hard",
+    "hard",
+    "sine",
+    "soft",
+    "neg_sine",
+    "hard",
+)
 SIM = {"edge_length": 0.5, "omega": 4.0, "friction": 0.7, "mass": 0.2, "soft_stiffness": 600.0}
 
 
@@ -168,8 +176,14 @@ def test_vxa_refuses_robots_whose_springs_carry_the_materials(examples: Path) ->
 def test_vxa_glb_and_stl_export_a_co_designed_robot() -> None:
     """voxel-phase robots were refused; their phases now go to Voxelyze's PhaseOffset layer."""
     labels = ("sine", "hard", "neg_sine", "soft")
-    robot = VoxelRobot((4, 1, 1), labels, Actuation(0.1, 0.5, 0.0), sim_settings({}),
-                       (0.0, 0.0, 1.0, 0.0), (0.5, 0.0, 0.5, 0.0))  # fmt: skip
+    robot = VoxelRobot(
+        (4, 1, 1),
+        labels,
+        Actuation(0.1, 0.5, 0.0),
+        sim_settings({}),
+        (0.0, 0.0, 1.0, 0.0),
+        (0.5, 0.0, 0.5, 0.0),
+    )
     for name in ("vxa", "glb", "stl"):
         assert len(export_robot(robot, name)) > 100
 

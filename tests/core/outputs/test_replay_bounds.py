@@ -22,10 +22,13 @@ def heights(view: dict) -> int:
 
 @pytest.mark.parametrize(
     "terrain",
-    [Steps.model_construct(height=0.01, depth=1e-4), Steps.model_construct(height=0.01, depth=1e-9),
-     Hurdles.model_construct(height=0.1, spacing=1e-4, width=1e-5),
-     Hurdles.model_construct(height=0.1, spacing=1e-9, width=1e-10)],
-)  # fmt: skip  # below MIN_TERRAIN_LENGTH, which a config refuses: the mesh is bounded anyway
+    [
+        Steps.model_construct(height=0.01, depth=1e-4),
+        Steps.model_construct(height=0.01, depth=1e-9),
+        Hurdles.model_construct(height=0.1, spacing=1e-4, width=1e-5),
+        Hurdles.model_construct(height=0.1, spacing=1e-9, width=1e-10),
+    ],
+)  # below MIN_TERRAIN_LENGTH, which a config refuses: the mesh is bounded anyway
 def test_a_terrain_of_tiny_features_gives_a_bounded_mesh(terrain: Steps | Hurdles) -> None:
     started = time.perf_counter()
     drawn = mesh(terrain, (-4.0, 36.0), (-4.0, 5.0), 0.1)
@@ -58,6 +61,8 @@ def test_a_robot_that_blew_up_replays_until_it_did() -> None:
     assert 0 < data["blew_up_at"] <= 2.0 and data["times"][-1] < data["blew_up_at"]
     assert np.isfinite(np.array(data["frames"])).all()
     json.dumps(data, allow_nan=False)
-    steady = replay_frames(VoxelRobot((2, 2, 2), ("sine",) * 8, Actuation(1.0, 0.5, 0.0),
-                                      SimSettings(duration=2.0)), 10.0)  # fmt: skip
+    steady = replay_frames(
+        VoxelRobot((2, 2, 2), ("sine",) * 8, Actuation(1.0, 0.5, 0.0), SimSettings(duration=2.0)),
+        10.0,
+    )
     assert steady["blew_up_at"] is None and steady["times"][-1] == pytest.approx(2.0)

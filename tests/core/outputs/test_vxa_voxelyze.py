@@ -19,8 +19,16 @@ from softevo.core.robots.robot_file import load_robot
 from softevo.core.robots.settings import sim_settings
 
 #: The per-voxel layers that engine reads from the Structure (VX_Object.cpp), one Layer per z.
-ENGINE_LAYERS = {"PhaseOffset", "FinalPhaseOffset", "TempAmpDamp", "FinalTempAmpDamp",
-                 "InitialVoxelSize", "FinalVoxelSize", "GrowthTime", "StartGrowthTime"}  # fmt: skip
+ENGINE_LAYERS = {
+    "PhaseOffset",
+    "FinalPhaseOffset",
+    "TempAmpDamp",
+    "FinalTempAmpDamp",
+    "InitialVoxelSize",
+    "FinalVoxelSize",
+    "GrowthTime",
+    "StartGrowthTime",
+}
 LABELS = ("sine", "hard", "neg_sine", "soft", "sine", "neg_sine")  # 3 x 2 x 1, x fastest
 
 
@@ -31,10 +39,13 @@ def parse(robot: VoxelRobot) -> ET.Element:
 def co_designed(**sim: float) -> VoxelRobot:
     """A voxel-phase robot with gene a: every actuated voxel its own phase and amplitude."""
     return VoxelRobot(
-        (3, 2, 1), LABELS, Actuation(a=-0.6, b=0.9, c=0.4),
+        (3, 2, 1),
+        LABELS,
+        Actuation(a=-0.6, b=0.9, c=0.4),
         sim_settings({"omega": 3.0, "duration": 6.0, "settle_time": 1.5, **sim}),
-        phases=(0.3, 0.0, -1.2, 0.0, 2.0, 0.7), amplitudes=(1.1, 0.0, -0.5, 0.0, 0.2, 1.4),
-    )  # fmt: skip
+        phases=(0.3, 0.0, -1.2, 0.0, 2.0, 0.7),
+        amplitudes=(1.1, 0.0, -0.5, 0.0, 0.2, 1.4),
+    )
 
 
 def layer_grid(structure: ET.Element, name: str) -> np.ndarray:
@@ -59,8 +70,10 @@ def engine_sizes(root: ET.Element, t: float) -> np.ndarray:
     period = float(env.findtext("Thermal/TempPeriod"))
     amplitude = float(env.findtext("Thermal/TempAmplitude"))
     ids = np.array([[int(c) for c in layer.text] for layer in structure.findall("./Data/Layer")])
-    ctes = {int(m.get("ID")): float(m.findtext("Mechanical/CTE"))
-            for m in root.findall("./VXC/Palette/Material")}  # fmt: skip
+    ctes = {
+        int(m.get("ID")): float(m.findtext("Mechanical/CTE"))
+        for m in root.findall("./VXC/Palette/Material")
+    }
     cte = np.vectorize(lambda i: ctes.get(i, 0.0))(ids).reshape(
         layer_grid(structure, "PhaseOffset").shape
     )

@@ -26,19 +26,47 @@ def test_a_pinned_spring_driven_sinusoidally_does_the_closed_form_work() -> None
     work = np.zeros(1)
     kind, params = kernel_params(sim_settings().terrain)
     kernels.simulate_one(
-        x, y, z, zeros.copy(), zeros.copy(), zeros.copy(), np.zeros(2),  # pinned: step factor 0
-        np.array([0]), np.array([1]), np.array([k]), np.array([length]), np.array([a]),
-        np.array([0.0]), np.zeros(0), omega, dt, steps, -0.981, 1e4, 0.0, 0.6, 0.99, kind, params,
-        settle_step, np.empty(2), np.empty(2), np.empty(2), 0, np.empty((0, 3, 2)), work,
-    )  # fmt: skip
+        x,
+        y,
+        z,
+        zeros.copy(),
+        zeros.copy(),
+        zeros.copy(),
+        np.zeros(2),  # pinned: step factor 0
+        np.array([0]),
+        np.array([1]),
+        np.array([k]),
+        np.array([length]),
+        np.array([a]),
+        np.array([0.0]),
+        np.zeros(0),
+        omega,
+        dt,
+        steps,
+        -0.981,
+        1e4,
+        0.0,
+        0.6,
+        0.99,
+        kind,
+        params,
+        settle_step,
+        np.empty(2),
+        np.empty(2),
+        np.empty(2),
+        0,
+        np.empty((0, 3, 2)),
+        work,
+    )
     expected = k * a * a * omega * (duration - settle) / math.pi
     assert work[0] == pytest.approx(expected, rel=1e-3)
 
 
 def test_energy_agrees_with_the_reference_and_is_the_same_batched() -> None:
     settings = sim_settings({"duration": 2.0, "settle_time": 0.5, "omega": 5.0})
-    robot = VoxelRobot((2, 2, 1), ("sine", "neg_sine", "hard", "soft"), Actuation(0.1, 1.0, 0.3),
-                       settings)  # fmt: skip
+    robot = VoxelRobot(
+        (2, 2, 1), ("sine", "neg_sine", "hard", "soft"), Actuation(0.1, 1.0, 0.3), settings
+    )
     mech = build_mechanics(robot)
     alone, _ = simulate(mech)
     assert alone.energy > 1.0

@@ -50,8 +50,9 @@ def test_kernel_agrees_with_reference_on_every_terrain(name: str) -> None:
     expected = reference.run(mech)
     assert result.stable
     assert np.abs(expected.final_positions - mech.positions).max() > 1e-2  # it really moved
-    np.testing.assert_allclose(result.final_positions, expected.final_positions, rtol=1e-9,
-                               atol=1e-9)  # fmt: skip
+    np.testing.assert_allclose(
+        result.final_positions, expected.final_positions, rtol=1e-9, atol=1e-9
+    )
     assert math.isclose(result.energy, expected.energy, rel_tol=1e-9)
 
 
@@ -65,8 +66,11 @@ def test_single_and_batched_runs_are_bit_identical_on_every_terrain(name: str) -
         for one, many in zip(alone, batched, strict=True):
             assert one.final_positions.tobytes() == many.final_positions.tobytes()
             assert (one.speed, one.forward_speed, one.climb_rate, one.energy) == (
-                many.speed, many.forward_speed, many.climb_rate, many.energy,
-            )  # fmt: skip
+                many.speed,
+                many.forward_speed,
+                many.climb_rate,
+                many.energy,
+            )
 
 
 def test_the_robot_starts_drop_height_above_the_terrain_beneath_it() -> None:
@@ -129,8 +133,9 @@ def test_a_rough_field_is_the_same_for_the_same_seed_in_another_process() -> Non
         "sys.stdout.write(Rough(amplitude=0.2, wavelength=2.0, seed=11)"
         ".surface(g[:, None], g[None, :]).tobytes().hex())"
     )
-    there = subprocess.run([sys.executable, "-P", "-c", code], capture_output=True, text=True,
-                           check=True, timeout=60).stdout  # fmt: skip
+    there = subprocess.run(
+        [sys.executable, "-P", "-c", code], capture_output=True, text=True, check=True, timeout=60
+    ).stdout
     assert bytes.fromhex(there) == here.tobytes()
     assert np.abs(here).max() <= 0.2 and np.abs(here).max() > 0.05  # a field, not a plane
     other = Rough(amplitude=0.2, wavelength=2.0, seed=12).surface(grid[:, None], grid[None, :])

@@ -64,9 +64,13 @@ def test_the_genome_round_trips_through_json_and_a_bad_one_is_refused() -> None:
 def test_activations_are_the_fields() -> None:
     x = np.array([-2.0, 0.0, 1.0])
     expected = {
-        "sine": np.sin(x), "gaussian": np.exp(-x * x), "sigmoid": 1 / (1 + np.exp(-x)),
-        "tanh": np.tanh(x), "abs": np.abs(x), "identity": x,
-    }  # fmt: skip
+        "sine": np.sin(x),
+        "gaussian": np.exp(-x * x),
+        "sigmoid": 1 / (1 + np.exp(-x)),
+        "tanh": np.tanh(x),
+        "abs": np.abs(x),
+        "identity": x,
+    }
     assert set(ACTIVATIONS) == set(expected)
     for name, values in expected.items():
         np.testing.assert_allclose(activate(name, x), values)
@@ -134,9 +138,16 @@ def test_the_robot_file_of_a_cppn_individual_simulates() -> None:
 @pytest.mark.parametrize("algorithm", ["ga", "random", "hillclimb", "map-elites", "nsga2", "afpo"])
 def test_every_strategy_runs_with_cppn(algorithm: str) -> None:
     result = library.evolve(
-        preset="quick", encoding="cppn", shape=[2, 2, 2], population=4, generations=2, seed=1,
-        algorithm=algorithm, sim={"duration": 0.3, "settle_time": 0.1}, workers=1,
-    )  # fmt: skip
+        preset="quick",
+        encoding="cppn",
+        shape=[2, 2, 2],
+        population=4,
+        generations=2,
+        seed=1,
+        algorithm=algorithm,
+        sim={"duration": 0.3, "settle_time": 0.1},
+        workers=1,
+    )
     assert len(result.curve) == 2 and result.best is not None
     assert len(result.best["voxels"]) == 8
 

@@ -30,9 +30,11 @@ def _crawler(examples: Path, terrain: dict, front: int) -> dict:
 
 @pytest.mark.parametrize(
     ("terrain", "first"),
-    [({"kind": "steps", "height": 0.2, "depth": 4.15}, 4.15),
-     ({"kind": "hurdles", "height": 0.15, "spacing": 2.5, "width": 0.5}, 2.5)],
-)  # fmt: skip
+    [
+        ({"kind": "steps", "height": 0.2, "depth": 4.15}, 4.15),
+        ({"kind": "hurdles", "height": 0.15, "spacing": 2.5, "width": 0.5}, 2.5),
+    ],
+)
 @pytest.mark.parametrize("front", [4, 3, 2])
 def test_the_first_feature_stands_just_ahead_of_the_front_face(
     examples: Path, terrain: dict, first: float, front: int

@@ -42,10 +42,19 @@ def test_the_papers_sine_and_neg_sine_are_phases_zero_and_pi() -> None:
     pi = [math.pi if label == "neg_sine" else 0.0 for label in labels]
     real = (*genome.real[: 2 + 27], *pi)
     phased = VoxelPhaseEncoding((3, 3, 3)).to_robot(
-        VoxelPhaseEncoding((3, 3, 3)).genome(np.array([labels.index(x) if False else
-            ["empty", "soft", "hard", "sine", "neg_sine"].index(x) for x in as_sine]),
-            np.array(real)), SIM,
-    )  # fmt: skip
+        VoxelPhaseEncoding((3, 3, 3)).genome(
+            np.array(
+                [
+                    labels.index(x)
+                    if False
+                    else ["empty", "soft", "hard", "sine", "neg_sine"].index(x)
+                    for x in as_sine
+                ]
+            ),
+            np.array(real),
+        ),
+        SIM,
+    )
     old, new = build_mechanics(paper), build_mechanics(phased)
     for name in ("stiffness", "rest_length", "amp_sin", "amp_cos"):
         np.testing.assert_allclose(getattr(new, name), getattr(old, name), rtol=0, atol=1e-15)
@@ -93,8 +102,9 @@ def test_crossover_carries_a_voxels_phase_and_amplitude_with_its_label() -> None
         children = mate(config, encoding, pair, (0, 1), rng)
         for child in children:
             amplitudes, phases = child.genome.real[2 : 2 + n], child.genome.real[2 + n :]
-            for label, amplitude, phase in zip(child.genome.discrete, amplitudes, phases,
-                                               strict=True):  # fmt: skip
+            for label, amplitude, phase in zip(
+                child.genome.discrete, amplitudes, phases, strict=True
+            ):
                 assert (amplitude, phase) == ((0.3, -1.0) if label == 0 else (-0.4, 2.0))
             swapped += len(set(child.genome.discrete)) == 2
     assert swapped > 0  # crossovers that mix the parents happened
@@ -103,11 +113,19 @@ def test_crossover_carries_a_voxels_phase_and_amplitude_with_its_label() -> None
 @pytest.mark.parametrize("algorithm", ["ga", "random", "map-elites"])
 def test_voxel_phase_runs_give_the_same_curve_on_one_and_two_processes(algorithm: str) -> None:
     request = {
-        "preset": "quick", "encoding": "voxel-phase", "algorithm": algorithm, "seed": 3,
-        "population": 8, "generations": 3, "sim": {"duration": 1.0},
-        **({"descriptors": ["voxels", "actuated"], "bins": [4, 4]}
-           if algorithm == "map-elites" else {}),
-    }  # fmt: skip
+        "preset": "quick",
+        "encoding": "voxel-phase",
+        "algorithm": algorithm,
+        "seed": 3,
+        "population": 8,
+        "generations": 3,
+        "sim": {"duration": 1.0},
+        **(
+            {"descriptors": ["voxels", "actuated"], "bins": [4, 4]}
+            if algorithm == "map-elites"
+            else {}
+        ),
+    }
     serial = Evolution.start(resolve(request))
     serial.run(SerialEvaluator())
     with PoolEvaluator(2) as pool:

@@ -49,10 +49,14 @@ def test_cache_saves_survivors_and_counts_add_up() -> None:
 
 
 def test_a_robot_that_cannot_be_built_fails_with_nan_not_zero() -> None:
-    document = robot_to_json(resolve(SMALL).make_encoding().to_robot(
-        resolve(SMALL).make_encoding().genome(np.zeros(27, dtype=int), (0.0, 0.0, 0.0)),
-        resolve(SMALL).sim,
-    ))  # fmt: skip
+    document = robot_to_json(
+        resolve(SMALL)
+        .make_encoding()
+        .to_robot(
+            resolve(SMALL).make_encoding().genome(np.zeros(27, dtype=int), (0.0, 0.0, 0.0)),
+            resolve(SMALL).sim,
+        )
+    )
     fitness = SerialEvaluator().evaluate_batch([document, {"format": "softevo.robot/1"}]).fitness
     assert np.isnan(fitness).all()
 

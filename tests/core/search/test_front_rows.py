@@ -15,9 +15,16 @@ def rows(seed: int, n: int) -> list[dict]:
     found = []
     for i in range(n):
         speed, cost = genomes[i % 37]  # a genome met again measures the same
-        found.append({"generation": i // 10, "index": i % 10, "fitness": speed,
-                      "operator": "crossover", "genome_hash": f"g{i % 37}",
-                      "measures": {"speed": speed, "cost_of_transport": cost}})  # fmt: skip
+        found.append(
+            {
+                "generation": i // 10,
+                "index": i % 10,
+                "fitness": speed,
+                "operator": "crossover",
+                "genome_hash": f"g{i % 37}",
+                "measures": {"speed": speed, "cost_of_transport": cost},
+            }
+        )
     return found
 
 

@@ -21,9 +21,15 @@ from softevo.core.search.evolution import Evolution
 from softevo.results import read_resumable, write_results
 
 HEADING = {
-    "preset": "quick", "algorithm": "map-elites", "descriptors": ["heading", "voxels"],
-    "bins": [8, 4], "population": 10, "generations": 4, "seed": 7, "sim": {"duration": 1.5},
-}  # fmt: skip
+    "preset": "quick",
+    "algorithm": "map-elites",
+    "descriptors": ["heading", "voxels"],
+    "bins": [8, 4],
+    "population": 10,
+    "generations": 4,
+    "seed": 7,
+    "sim": {"duration": 1.5},
+}
 
 
 def crawler() -> VoxelRobot:

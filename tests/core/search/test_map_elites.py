@@ -19,9 +19,15 @@ from softevo.core.search.evolution import Evolution
 from softevo.core.search.state import GAState
 
 QD = {
-    "preset": "quick", "algorithm": "map-elites", "descriptors": ["voxels", "actuated"],
-    "bins": [4, 4], "population": 10, "generations": 5, "seed": 7, "sim": {"duration": 1.5},
-}  # fmt: skip
+    "preset": "quick",
+    "algorithm": "map-elites",
+    "descriptors": ["voxels", "actuated"],
+    "bins": [4, 4],
+    "population": 10,
+    "generations": 5,
+    "seed": 7,
+    "sim": {"duration": 1.5},
+}
 
 
 def genome(*labels: int) -> Genome:
@@ -30,10 +36,13 @@ def genome(*labels: int) -> Genome:
 
 def test_the_archive_keeps_the_better_elite_per_cell_whatever_the_order() -> None:
     offers = [  # (values, fitness, genome): three share a cell, two tie on fitness
-        ((0.10, 0.10), 0.5, genome(1, 2)), ((0.12, 0.05), 0.9, genome(2, 2)),
-        ((0.11, 0.15), 0.9, genome(3, 1)), ((0.90, 0.90), 0.2, genome(1, 1)),
-        ((0.95, 0.99), float("nan"), genome(4, 4)), ((1.0, 0.0), -0.1, genome(3, 3)),
-    ]  # fmt: skip
+        ((0.10, 0.10), 0.5, genome(1, 2)),
+        ((0.12, 0.05), 0.9, genome(2, 2)),
+        ((0.11, 0.15), 0.9, genome(3, 1)),
+        ((0.90, 0.90), 0.2, genome(1, 1)),
+        ((0.95, 0.99), float("nan"), genome(4, 4)),
+        ((1.0, 0.0), -0.1, genome(3, 3)),
+    ]
     results = set()
     for order in itertools.permutations(range(len(offers))):
         archive = Archive(("voxels", "actuated"), (4, 4))
@@ -66,8 +75,11 @@ def test_descriptors_describe_the_simulated_body_not_the_cut_off_voxels() -> Non
     # 3x1x2: bottom row soft, hard, sine; top row empty, empty, neg_sine; plus nothing cut off
     labels = [1, 2, 3, 0, 0, 4]
     assert describe(["voxels", "actuated", "soft", "height"], labels, (3, 1, 2)) == (
-        4 / 6, 2 / 4, 1 / 4, 1.0,
-    )  # fmt: skip
+        4 / 6,
+        2 / 4,
+        1 / 4,
+        1.0,
+    )
     # a lone voxel in the far corner is not part of the body: one voxel, one layer of two
     assert describe(["voxels", "height"], [3, 0, 0, 0, 0, 0, 0, 2], (2, 2, 2)) == (1 / 8, 0.5)
     assert describe(["voxels"], [0] * 8, (2, 2, 2)) == ()

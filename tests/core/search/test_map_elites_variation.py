@@ -23,10 +23,15 @@ BOUNDS = np.array([[-1.0, 1.0], [-2.0, 2.0], [0.0, 10.0]])
 #: A tiny map-elites run (crossover, mutation and an immigrant every generation), and the
 #: SHA-256 of its curve and archive computed with the code before MAP-Elites had options.
 PINNED_RUN = {
-    "preset": "quick", "algorithm": "map-elites", "descriptors": ["voxels", "actuated"],
-    "bins": [4, 4], "population": 6, "generations": 3, "seed": 3,
+    "preset": "quick",
+    "algorithm": "map-elites",
+    "descriptors": ["voxels", "actuated"],
+    "bins": [4, 4],
+    "population": 6,
+    "generations": 3,
+    "seed": 3,
     "sim": {"profile": "paper", "duration": 1.0, "settle_time": 0.5},
-}  # fmt: skip
+}
 PINNED_CURVE = "02371943c7bdcf2467f562cb62459aa98458c9598cac3d5f08ed29b4c8d4dafa"
 PINNED_ARCHIVE = "29cf7cc5db791b4850b450d02dc2a2767455ed727f10dc68a6dbb7f5463c1845"
 MUTATION = {"variation": "mutation", "label_rate": 0.1}
@@ -113,8 +118,9 @@ def elites_state(options: dict) -> tuple[object, GAState]:
     for i in range(5):
         archive.add((i / 5, i / 5), float(i), 0, i, encoding.random(rng))
     previous = [Individual(encoding.random(rng), "random") for _ in range(6)]
-    state = GAState(seed=4, generation=1, previous=previous, previous_fitness=[0.0] * 6,
-                    archive=archive)  # fmt: skip
+    state = GAState(
+        seed=4, generation=1, previous=previous, previous_fitness=[0.0] * 6, archive=archive
+    )
     return make_strategy(config.ga_config(), encoding), state
 
 
@@ -162,8 +168,10 @@ def test_spread_random_genomes_draw_bodies_of_every_size() -> None:
     assert spread_random(encoding, np.random.default_rng(3)) == spread[3]
     for genome in spread:
         encoding.check(genome)  # labels in the alphabet, real genes within their bounds
-        assert all(low <= g <= high for g, (low, high) in zip(genome.real, encoding.real_bounds,
-                                                                strict=True))  # fmt: skip
+        assert all(
+            low <= g <= high
+            for g, (low, high) in zip(genome.real, encoding.real_bounds, strict=True)
+        )
     filled = [np.mean(np.array(g.discrete) != 0) for g in spread]
     assert min(filled) < 0.4 and max(filled) > 0.95  # uniform labels: about 0.8 every time
     assert np.std(filled) > 3 * np.std([np.mean(np.array(g.discrete) != 0) for g in uniform])

@@ -24,10 +24,12 @@ def toy_measures(individuals: list[Individual]) -> list[dict[str, float]]:
     records = []
     for item in individuals:
         genes = np.array(item.genome.discrete)
-        records.append({
-            "speed": float(np.count_nonzero(genes == 2)) / 10,
-            "cost_of_transport": 1.0 + float(np.count_nonzero(genes)) / 10,
-        })  # fmt: skip
+        records.append(
+            {
+                "speed": float(np.count_nonzero(genes == 2)) / 10,
+                "cost_of_transport": 1.0 + float(np.count_nonzero(genes)) / 10,
+            }
+        )
     return records
 
 
@@ -102,10 +104,16 @@ def held(strategy_name: str, population: int, values: list[list[float]], **data:
     previous = [Individual(strategy.encoding.random(rng), "random") for _ in values]
     born = data.pop("born", [[0, i] for i in range(len(values))])
     state = GAState(
-        seed=0, generation=3, previous=previous, previous_fitness=[v[0] for v in values],
-        data={"values": [[None if math.isnan(x) else x for x in v] for v in values],
-              "born": born, **data},
-    )  # fmt: skip
+        seed=0,
+        generation=3,
+        previous=previous,
+        previous_fitness=[v[0] for v in values],
+        data={
+            "values": [[None if math.isnan(x) else x for x in v] for v in values],
+            "born": born,
+            **data,
+        },
+    )
     return strategy, state
 
 
@@ -171,17 +179,25 @@ def test_a_weighted_ga_selects_on_the_weighted_sum_and_keeps_speed_as_fitness() 
 
 def test_a_weighted_ga_keeps_the_best_sum_not_the_fastest() -> None:
     nan = math.nan
-    config = GAConfig.model_validate({
-        "population": 4, "generations": 5, "objectives": OBJECTIVES, "selection": "tournament",
-        "options": {"weights": [1.0, 1.0]},
-    })  # fmt: skip
+    config = GAConfig.model_validate(
+        {
+            "population": 4,
+            "generations": 5,
+            "objectives": OBJECTIVES,
+            "selection": "tournament",
+            "options": {"weights": [1.0, 1.0]},
+        }
+    )
     strategy = make_strategy(config, make_encoding("voxel", (2, 2, 2)))
     rng = np.random.default_rng(0)
     previous = [Individual(strategy.encoding.random(rng), "random") for _ in range(4)]
     state = GAState(
-        seed=0, generation=2, previous=previous, previous_fitness=[0.9, 0.1, nan, 0.5],
+        seed=0,
+        generation=2,
+        previous=previous,
+        previous_fitness=[0.9, 0.1, nan, 0.5],
         data={"weighted": [-2.0, 0.3, None, -0.1]},
-    )  # fmt: skip
+    )
     survivors = [item.parents for item in strategy.ask(state) if item.operator == "survivor"]
     assert survivors == [(1,)]  # the elite by sum, not the fastest (0) nor the failed (2)
     state.data = {}

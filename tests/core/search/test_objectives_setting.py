@@ -17,8 +17,12 @@ EXAMPLES = Path(__file__).parents[3] / "docs" / "experiments"
 
 def test_names_and_objects_are_one_setting_stored_with_their_reference() -> None:
     short = resolve({"preset": "quick", "objectives": ["speed", "-cost_of_transport"]})
-    long = resolve({"preset": "quick", "objectives": [
-        {"measure": "speed"}, {"measure": "cost_of_transport", "goal": "min"}]})  # fmt: skip
+    long = resolve(
+        {
+            "preset": "quick",
+            "objectives": [{"measure": "speed"}, {"measure": "cost_of_transport", "goal": "min"}],
+        }
+    )
     assert short == long
     stored = short.to_json()["objectives"]
     assert stored == [

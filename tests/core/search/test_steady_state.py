@@ -21,9 +21,13 @@ from softevo.core.search.state import GAState
 from softevo.core.search.steady_state import KEY
 
 REQUEST = {
-    "preset": "quick", "seed": 4, "population": 8, "generations": 5,
-    "algorithm": "steady-state", "options": {"window": 4},
-}  # fmt: skip
+    "preset": "quick",
+    "seed": 4,
+    "population": 8,
+    "generations": 5,
+    "algorithm": "steady-state",
+    "options": {"window": 4},
+}
 
 
 def _run(evaluator: Evaluator, request: dict[str, Any] = REQUEST) -> Evolution:
@@ -112,9 +116,12 @@ def test_births_name_their_parents_by_birth_and_the_best_never_falls() -> None:
 
 def test_a_steady_state_map_elites_draws_parents_from_the_archive() -> None:
     request = {
-        **REQUEST, "shape": [2, 2, 2], "descriptors": ["voxels", "actuated"], "bins": [4, 4],
+        **REQUEST,
+        "shape": [2, 2, 2],
+        "descriptors": ["voxels", "actuated"],
+        "bins": [4, 4],
         "options": {"window": 4, "parents": "archive"},
-    }  # fmt: skip
+    }
     serial = _run(SerialEvaluator(), request)
     assert serial.curve() == _run(Shuffled(4, 5), request).curve()
     assert serial.curve()[-1]["coverage"] > 0
@@ -172,8 +179,14 @@ class Sizes(Shuffled):
 def test_robots_of_small_boxes_share_calls_up_to_the_lanes() -> None:
     """A paper-cube robot (8 lattice points) goes out 8 to a call in a streaming run, a 3x3x3
     voxel robot (64 points) `batch_size` (4) at most; the same run either way."""
-    cube = {"preset": "paper-cube", "seed": 2, "generations": 3, "algorithm": "steady-state",
-            "options": {"window": 60}, "sim": {"duration": 1.0, "settle_time": 0.5}}  # fmt: skip
+    cube = {
+        "preset": "paper-cube",
+        "seed": 2,
+        "generations": 3,
+        "algorithm": "steady-state",
+        "options": {"window": 60},
+        "sim": {"duration": 1.0, "settle_time": 0.5},
+    }
     sizes = Sizes(1)
     assert _run(sizes, cube).curve() == _run(SerialEvaluator(), cube).curve()
     assert max(sizes.sizes) == 8
