@@ -27,8 +27,8 @@ import numpy as np
 
 from softevo import library
 from softevo.core.config import resolve
-from softevo.core.search import pareto
 from softevo.core.evolution import Evolution
+from softevo.core.search import pareto
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "docs" / "experiments" / "search"

@@ -79,7 +79,9 @@ def _worker_parser(commands: Any) -> None:
         choices=["fork", "simple"],
         default="fork",
         help="fork (default): each job in a child of the warm worker, killed if it runs away; "
-        "simple: in the worker itself (no hard time limit)",
+        "simple: in the worker itself, no fork per job (about 5 ms of RQ's work a job instead "
+        "of 20); a job past twice its timeout (a minute past at most) fails and the worker "
+        "restarts in place",
     )
     worker.add_argument(
         "--log-level", default="info", choices=["debug", "info", "warning", "error"]

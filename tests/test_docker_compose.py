@@ -178,7 +178,13 @@ def test_api_uses_postgres_and_redis_and_waits_until_they_are_healthy() -> None:
 def test_two_workers_share_the_image_and_reach_redis() -> None:
     services = load_compose()["services"]
     worker = services["worker"]
-    assert worker["command"] == ["softevo", "worker"]
+    # no fork per job by default (`softevo.worker.watchdog` keeps the hard limit), one variable away
+    assert worker["command"] == [
+        "softevo",
+        "worker",
+        "--worker-class",
+        "${SOFTEVO_WORKER_CLASS:-simple}",
+    ]
     assert worker["deploy"]["replicas"] == 2
     api_redis = services["api"]["environment"]["SOFTEVO_REDIS_URL"]
     assert worker["environment"]["SOFTEVO_REDIS_URL"] == api_redis
@@ -254,6 +260,7 @@ def test_every_variable_is_documented_in_env_example() -> None:
         "REDIS_PASSWORD",
         "SOFTEVO_API_TOKEN",
         "SOFTEVO_PROTECT_READS",
+        "SOFTEVO_WORKER_CLASS",
     }
     assert used <= documented, f"missing from .env.example: {used - documented}"
 

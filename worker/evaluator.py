@@ -18,7 +18,6 @@ Only redis, rq and numpy are imported here: the API process enqueues without loa
 from __future__ import annotations
 
 import contextlib
-import json
 import logging
 import math
 import threading
@@ -41,7 +40,6 @@ from softevo.core.evaluator import (
     Evaluator,
     batch_digest,
     refuse_dropped,
-    well_formed,
 )
 from softevo.worker.queue import (
     JOB_FUNCTION,
@@ -52,6 +50,7 @@ from softevo.worker.queue import (
     engine_fingerprint,
     result_key,
 )
+from softevo.worker.results import parse_result
 
 log = logging.getLogger("softevo.rq")
 REDIS_DOWN = (RedisConnectionError, RedisTimeoutError, ConnectionError, OSError)
@@ -211,13 +210,16 @@ class RQEvaluator(Evaluator):
         expected = self.expected_seconds(files)
         # RQ kills a work horse 60 s after this: the hard limit for a job that runs away
         timeout = 600 if expected is None else max(60, math.ceil(20 * expected))
-        # on a pipeline of ours, RQ sends the job and its queue's name in one round trip, not two
+        # on a pipeline of ours, RQ sends the job and its queue's name in one round trip, not two;
+        # the description is said, or RQ would build it from the repr of every robot file (about
+        # a tenth of the enqueue's CPU), and rq-dashboard shows the batch's key instead
         with self.connection.pipeline() as pipe:
-            self.queue.enqueue(
+            self.queue.enqueue_call(
                 self.job_function,
                 args=(key, files, *extra),
                 job_id=job_id,
-                job_timeout=timeout,
+                timeout=timeout,
+                description=f"softevo {self.job_function.rsplit('.', 1)[-1]} {key} ({len(files)})",
                 meta={"engine": self.engine},
                 result_ttl=600,
                 failure_ttl=3600,
@@ -340,33 +342,6 @@ def work_units(robot_file: dict[str, Any]) -> float:
     except (AttributeError, TypeError, ValueError, ZeroDivisionError):
         return 1.0
     return units if math.isfinite(units) and units > 0 else 1.0
-
-
-def parse_result(raw: bytes | str, robots: int) -> dict[str, Any] | None:
-    """A job's result as plain JSON data, or None when it is not one: bytes that are not JSON
-    (a pickle, say) are never deserialised any other way, and a result of the wrong shape is
-    not taken for fitness."""
-    try:
-        payload = json.loads(raw, parse_constant=_refuse_constant)
-    except (ValueError, UnicodeDecodeError):
-        return None
-    if not isinstance(payload, dict) or not isinstance(payload.get("worker", ""), str):
-        return None
-    if "fitness" in payload:
-        seconds = payload.get("seconds")
-        if not well_formed(payload, robots):
-            return None
-        if type(seconds) not in (int, float) or seconds < 0:
-            return None
-        return payload
-    if isinstance(payload.get("refused"), str):
-        return payload
-    return payload if isinstance(payload.get("error"), str) else None
-
-
-def _refuse_constant(name: str) -> Any:
-    """NaN and Infinity are not JSON: a failed robot's speed is null."""
-    raise ValueError(f"{name} in a result")
 
 
 class EngineMismatchError(RuntimeError):

@@ -3,7 +3,9 @@ its first job, so no job pays for compilation or a cold import.
 
 The default class is RQ's forking `Worker`: each job runs in a child forked from the warm parent
 (kernels already loaded), and the parent can kill a child that runs away, which no alarm signal
-inside a numba loop could. BENCHMARKS.md (`bench/rq_workers.py`) compares it with the alternatives.
+inside a numba loop could. `simple` runs each job in the worker itself (no fork: 5 ms of RQ's
+work a job instead of 20), its hard time limit kept by a timer thread (`softevo.worker.watchdog`).
+BENCHMARKS.md (`bench/rq_workers.py`) compares it with the alternatives.
 """
 
 from __future__ import annotations
@@ -18,12 +20,13 @@ import uuid
 from redis import Redis
 from redis.exceptions import ConnectionError as RedisConnectionError
 from redis.exceptions import TimeoutError as RedisTimeoutError
-from rq import Queue, SimpleWorker, Worker
+from rq import Queue, Worker
 
 from softevo.worker.job import job_class
 from softevo.worker.queue import QUEUE, SERIALIZER, connect
+from softevo.worker.watchdog import WatchedSimpleWorker
 
-WORKER_CLASSES: dict[str, type[Worker]] = {"fork": Worker, "simple": SimpleWorker}
+WORKER_CLASSES: dict[str, type] = {"fork": Worker, "simple": WatchedSimpleWorker}
 
 
 def run_worker(

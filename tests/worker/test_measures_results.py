@@ -13,7 +13,7 @@ import pytest
 from softevo.api.store.driving import measures_text
 from softevo.core.evaluator import BatchResult
 from softevo.core.nulls import record_text
-from softevo.worker.evaluator import parse_result
+from softevo.worker.results import parse_result
 
 GOOD = {
     "fitness": [0.5, None, None],

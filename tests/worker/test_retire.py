@@ -51,3 +51,21 @@ def test_work_units_count_occupied_voxels() -> None:
     assert work_units({"voxels": ("soft", "empty"), "sim": {}}) == pytest.approx(20000)
     assert work_units({"voxels": [], "springs": [[0, 1]] * 56, "sim": {}}) == pytest.approx(40000)
     assert work_units({"voxels": 3}) == 1.0  # malformed: one unit, never an error
+
+
+def test_a_job_is_described_by_its_batch_not_its_robot_files(redis_server) -> None:
+    """RQ would describe a job by the repr of its arguments (every robot file): costly to build
+    on each enqueue and unreadable in rq-dashboard; the batch's key and size are said instead,
+    and the job still carries the files and its timeout."""
+    evaluator = RQEvaluator(redis_server.url)
+    connection = connect(redis_server.url)
+    try:
+        evaluator._enqueue(FILES * 2, "described", 1)
+        job = Job.fetch("softevo-described-a1", connection=connection, serializer=SERIALIZER)
+        assert job.description == "softevo evaluate_batch described (2)"
+        assert job.args == ["described", FILES * 2]
+        assert job.timeout == 600  # nothing measured yet: the first job's hard limit
+        job.delete()
+    finally:
+        evaluator.close()
+        connection.close()
