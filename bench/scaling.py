@@ -67,7 +67,7 @@ BENCH = Path(__file__).resolve().parent
 WORKER = """
 import sys
 from rq import Queue, SimpleWorker
-from softevo.worker.job import job_class
+from softevo.worker.allow_list import job_class
 from softevo.worker.queue import QUEUE, SERIALIZER, connect
 url, name, function = sys.argv[1:4]
 connection = connect(url)

@@ -22,7 +22,7 @@ from redis.exceptions import ConnectionError as RedisConnectionError
 from redis.exceptions import TimeoutError as RedisTimeoutError
 from rq import Queue, Worker
 
-from softevo.worker.job import job_class
+from softevo.worker.allow_list import job_class
 from softevo.worker.queue import QUEUE, SERIALIZER, connect
 from softevo.worker.watchdog import WatchedSimpleWorker
 

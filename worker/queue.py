@@ -14,7 +14,7 @@ QUEUE = "softevo"
 #: Named by import path, so the process that enqueues never imports the physics.
 JOB_FUNCTION = "softevo.worker.jobs.evaluate_batch"
 REPLAY_FUNCTION = "softevo.worker.jobs.replay"
-#: What a worker runs (`softevo.worker.job.SoftevoJob`): these, and nothing else by default.
+#: What a worker runs (`softevo.worker.allow_list.SoftevoJob`): these, and nothing else by default.
 JOB_FUNCTIONS = frozenset({JOB_FUNCTION, REPLAY_FUNCTION})
 SERIALIZER = JSONSerializer
 #: How long a batch's result waits to be collected (s); a late duplicate expires with it.

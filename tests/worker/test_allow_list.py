@@ -1,4 +1,4 @@
-"""A worker runs softevo's jobs and nothing else (`softevo.worker.job`): a job written into
+"""A worker runs softevo's jobs and nothing else (`softevo.worker.allow_list`): a job written into
 Redis that names another function (`os.system`, `builtins.eval`) or any callback fails, runs
 nothing, is said in the worker's log, and the worker goes on to evaluate the next batch."""
 
