@@ -1,8 +1,8 @@
 """The allow list: the job class every `softevo worker` uses runs softevo's own job functions
-and nothing else. RQ names a job's function and callbacks by import path, so anyone who can write to Redis
-could otherwise have a worker run `os.system`; such a job fails here, before anything is
-imported, with a log line, and the worker goes on with the next job. A job hash that cannot be
-read at all is moved aside (`softevo:malformed:<id>`), logged, and skipped."""
+and nothing else. RQ names a job's function and callbacks by import path, so anyone who can
+write to Redis could otherwise have a worker run `os.system`; such a job fails here, before
+anything is imported, with a log line, and the worker goes on with the next job. A job hash
+that cannot be read at all is moved aside (`softevo:malformed:<id>`), logged, and skipped."""
 
 from __future__ import annotations
 
