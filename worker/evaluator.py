@@ -48,6 +48,7 @@ from softevo.worker.queue import (
     SERIALIZER,
     connect,
     engine_fingerprint,
+    pop_result,
     result_key,
 )
 from softevo.worker.results import parse_result
@@ -125,7 +126,7 @@ class RQEvaluator(Evaluator):
         count, when = self._workers
         if time.monotonic() - when < 5.0:
             return count
-        with contextlib.suppress(REDIS_DOWN):
+        with contextlib.suppress(*REDIS_DOWN):
             count = Worker.count(connection=self.connection, queue=self.queue)
             if count > 0:
                 self._empty_since = None
@@ -249,7 +250,7 @@ class RQEvaluator(Evaluator):
             try:
                 if job_id is None:
                     job_id = self._enqueue(files, key, attempt, extra)
-                item = self.connection.blpop([result_key(key)], timeout=self.poll_seconds)
+                item = pop_result(self.connection, result_key(key), self.poll_seconds)
                 payload = None if item is None else parse_result(item[1], len(files))
                 if payload is not None:
                     self._learn(payload, files)

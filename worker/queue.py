@@ -5,6 +5,7 @@ pickles, so nothing read from Redis can run code in the API process."""
 from __future__ import annotations
 
 import json
+from typing import cast
 from urllib.parse import urlsplit, urlunsplit
 
 from redis import Redis
@@ -62,3 +63,9 @@ def connect(url: str) -> Redis:
     return Redis.from_url(
         url, socket_connect_timeout=5, socket_keepalive=True, health_check_interval=30
     )
+
+
+def pop_result(connection: Redis, key: str, timeout: float) -> tuple[bytes, bytes] | None:
+    """The next result pushed onto `key`'s list, waiting up to `timeout` s; None if none came.
+    (redis-py types its commands for the sync and asyncio clients at once; this one is sync.)"""
+    return cast("tuple[bytes, bytes] | None", connection.blpop([key], timeout=timeout))

@@ -23,7 +23,7 @@ def parse_result(raw: bytes | str, robots: int) -> dict[str, Any] | None:
         seconds = payload.get("seconds")
         if not well_formed(payload, robots):
             return None
-        if type(seconds) not in (int, float) or seconds < 0:
+        if not isinstance(seconds, int | float) or isinstance(seconds, bool) or seconds < 0:
             return None
         return payload
     if isinstance(payload.get("refused"), str):

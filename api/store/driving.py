@@ -117,20 +117,21 @@ def keep_generation(
         if not rows:
             _insert_members(connection, run_id, generation, members)
             return {}, {}
-        stored = {row.index: row.genome_hash for row in rows}
+        # unpacked by column: a Row's `.index` is tuple.index
+        stored = {index: genome_hash for index, genome_hash, *_ in rows}
         if stored != {index: member["genome_hash"] for index, member in enumerate(members)}:
             raise GenerationMismatchError(
                 f"generation {generation} in the database differs from the one the GA "
                 "regenerated from the run's seed; refusing to mix them"
             )
         done = [
-            row
-            for row in rows
-            if row.status in (IndividualStatus.EVALUATED, IndividualStatus.FAILED)
+            (index, fitness, measures)
+            for index, _, status, fitness, measures in rows
+            if status in (IndividualStatus.EVALUATED, IndividualStatus.FAILED)
         ]
         return (
-            {row.index: from_null(row.fitness) for row in done},
-            {row.index: from_null_record(row.measures) for row in done},
+            {index: from_null(fitness) for index, fitness, _ in done},
+            {index: from_null_record(measures) for index, _, measures in done},
         )
 
 
