@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from softevo.api.store.driving import measures_text
+from softevo.api.store.fitness_rows import measures_text
 from softevo.core.evaluator import BatchResult
 from softevo.core.nulls import record_text
 from softevo.worker.results import parse_result

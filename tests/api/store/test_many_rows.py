@@ -15,7 +15,8 @@ from sqlalchemy import Text, cast, select
 from softevo.api import store
 from softevo.api.db import Database
 from softevo.api.models import IndividualRow
-from softevo.api.store.driving import _INSERT_MEMBER, MEMBER_COLUMNS, Landed
+from softevo.api.store.driving import _INSERT_MEMBER, MEMBER_COLUMNS
+from softevo.api.store.fitness_rows import Landed
 from tests.api.store.test_store import OWNER, driven
 
 AWKWARD = ["a,b", 'q"uote', "{brace}", "back\\slash", "NULL", "", "ünï ☃", "sp ace"]

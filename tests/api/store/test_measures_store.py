@@ -17,7 +17,8 @@ from sqlalchemy import text
 from softevo.api import store
 from softevo.api.coordinator import Coordinator
 from softevo.api.db import Database, alembic_config
-from softevo.api.store.driving import GenerationCommit, Landed, measures_text
+from softevo.api.store.driving import GenerationCommit
+from softevo.api.store.fitness_rows import Landed, measures_text
 from softevo.core.config import resolve
 from softevo.core.evaluator import BatchResult
 from softevo.core.nulls import Record, from_null_record
