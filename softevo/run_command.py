@@ -54,11 +54,20 @@ def add_parser(commands: Any) -> None:
     run.add_argument("--preset", choices=sorted(PRESETS), help=f"(quick) {presets}")
     run.add_argument("--shape", metavar="NXxNYxNZ", help="bounding box, e.g. 5x5x3")
     run.add_argument(
+<<<<<<< HEAD
         "--encoding",
         choices=["voxel", "voxel-phase", "cube-springs", "spring", "cppn"],
         help="voxel-phase: every actuated voxel evolves its own phase and amplitude (co-design); "
         "cppn: a network grows the body, phases and amplitudes (NEAT variation, docs/evolution.md)",
     )
+=======
+        "--encoding", metavar="NAME",
+        help="voxel, voxel-phase, cube-springs, spring, cppn or one installed in the entry-point "
+        "group softevo.encodings; voxel-phase: every actuated voxel evolves its own phase and "
+        "amplitude (co-design); cppn: a network grows the body, phases and amplitudes (NEAT "
+        "variation, docs/evolution.md)",
+    )
+>>>>>>> issue-50
     run.add_argument("--seed", type=int, help="random seed (0)")
     run.add_argument(
         "--population",
