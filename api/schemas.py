@@ -62,7 +62,12 @@ class _RunSettings(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     preset: str = Field("paper-voxel", description="preset whose settings the others override")
-    encoding: Literal["voxel", "voxel-phase", "cube-springs", "spring", "cppn"] | None = None
+    encoding: str | None = Field(
+        None,
+        max_length=100,
+        description="an encoding installed in the entry-point group `softevo.encodings` "
+        "(built in: voxel, voxel-phase, cube-springs, spring, cppn)",
+    )
     sim: SimOverrides | None = Field(
         None,
         description="simulation settings to override; `terrain` takes an object such as "

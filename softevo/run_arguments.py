@@ -37,9 +37,11 @@ def add_arguments(run: argparse.ArgumentParser) -> None:
     run.add_argument("--shape", metavar="NXxNYxNZ", help="bounding box, e.g. 5x5x3")
     run.add_argument(
         "--encoding",
-        choices=["voxel", "voxel-phase", "cube-springs", "spring", "cppn"],
-        help="voxel-phase: every actuated voxel evolves its own phase and amplitude (co-design); "
-        "cppn: a network grows the body, phases and amplitudes (NEAT variation, docs/evolution.md)",
+        metavar="NAME",
+        help="voxel, voxel-phase, cube-springs, spring, cppn or one installed in the entry-point "
+        "group softevo.encodings; voxel-phase: every actuated voxel evolves its own phase and "
+        "amplitude (co-design); cppn: a network grows the body, phases and amplitudes (NEAT "
+        "variation, docs/evolution.md)",
     )
     run.add_argument("--seed", type=int, help="random seed (0)")
     run.add_argument(

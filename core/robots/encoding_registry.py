@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from functools import cache
 from importlib.metadata import entry_points
+from typing import TypeGuard
 
 from softevo.core.robots.encodings import (
     PAPER_CUBE_OPTIONS,
@@ -39,7 +40,7 @@ def encodings() -> dict[str, type[Encoding]]:
                 f"encoding {point.name!r}: cannot load {point.value} ({error}; an install "
                 "older than its code? pip install --no-deps --no-build-isolation -e .)"
             ) from None
-        if not (isinstance(loaded, type) and issubclass(loaded, Encoding)):
+        if not _is_encoding(loaded):
             raise EncodingError(f"encoding {point.name!r}: {point.value} is not an Encoding")
         if loaded.name != point.name:
             raise EncodingError(
@@ -64,3 +65,7 @@ def make_encoding(
 ) -> Encoding:
     """The encoding called `name` for a bounding box of `shape`."""
     return encoding_class(name).build(shape, cube_options)
+
+
+def _is_encoding(loaded: object) -> TypeGuard[type[Encoding]]:
+    return isinstance(loaded, type) and issubclass(loaded, Encoding)

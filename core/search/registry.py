@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from functools import cache
 from importlib.metadata import entry_points
+from typing import TypeGuard
 
 from softevo.core.search.strategy import Strategy
 
@@ -38,7 +39,7 @@ def strategies() -> dict[str, type[Strategy]]:
                 f"algorithm {point.name!r}: cannot load {point.value} ({error}; an install "
                 "older than its code? pip install --no-deps --no-build-isolation -e .)"
             ) from None
-        if not (isinstance(loaded, type) and issubclass(loaded, Strategy)):
+        if not _is_strategy(loaded):
             raise StrategyError(f"algorithm {point.name!r}: {point.value} is not a Strategy")
         if loaded.name != point.name:
             raise StrategyError(
@@ -56,3 +57,7 @@ def strategy_class(name: str) -> type[Strategy]:
     if name not in installed:
         raise StrategyError(f"algorithm: unknown {name!r} (installed: {', '.join(installed)})")
     return installed[name]
+
+
+def _is_strategy(loaded: object) -> TypeGuard[type[Strategy]]:
+    return isinstance(loaded, type) and issubclass(loaded, Strategy)
