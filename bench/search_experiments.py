@@ -161,14 +161,14 @@ def run_trade_off(args: argparse.Namespace, results: dict[str, Any]) -> None:
 def run_windows(args: argparse.Namespace, results: dict[str, Any]) -> None:
     """GA and W = P, 2P, 4P on every seed, on the local pool and (with --rq) on RQ workers."""
     population = 25
-    for where, rq in (("local", None), ("rq", args.rq)):
-        if where == "rq" and rq is None:
-            continue
-        for seed in args.seeds:
+    backends = [("local", None)] + ([("rq", args.rq)] if args.rq else [])
+    for seed in args.seeds:
+        for where, rq in backends:
             found = {"GA": window_run(None, seed, args, rq)}
             for k in (1, 2, 4):
                 found[f"W={k}P"] = window_run(k * population, seed, args, rq)
             results.setdefault("window", {}).setdefault(where, {})[str(seed)] = found
+            (args.out / "results.json").write_text(json.dumps(results))  # kept seed by seed
             print(f"window {where} seed {seed} done", flush=True)
 
 
