@@ -143,7 +143,7 @@ def bounds(runs: list[dict]) -> tuple[np.ndarray, np.ndarray]:
 def run_trade_off(args: argparse.Namespace, results: dict[str, Any]) -> None:
     """Every method on every task and seed (those already in `results` kept), each scored in
     the box of all of that task's and seed's final fronts."""
-    for preset in TASKS:
+    for preset in args.tasks:
         for seed in args.seeds:
             kept = results.setdefault("trade_off", {}).setdefault(preset, {})
             runs = kept.get(str(seed), {}).get("runs", {})
@@ -161,14 +161,14 @@ def run_trade_off(args: argparse.Namespace, results: dict[str, Any]) -> None:
 def run_windows(args: argparse.Namespace, results: dict[str, Any]) -> None:
     """GA and W = P, 2P, 4P on every seed, on the local pool and (with --rq) on RQ workers."""
     population = 25
-    for where, rq in (("local", None), ("rq", args.rq)):
-        if where == "rq" and rq is None:
-            continue
-        for seed in args.seeds:
+    backends = [("local", None)] + ([("rq", args.rq)] if args.rq else [])
+    for seed in args.seeds:
+        for where, rq in backends:
             found = {"GA": window_run(None, seed, args, rq)}
             for k in (1, 2, 4):
                 found[f"W={k}P"] = window_run(k * population, seed, args, rq)
             results.setdefault("window", {}).setdefault(where, {})[str(seed)] = found
+            (args.out / "results.json").write_text(json.dumps(results))  # kept seed by seed
             print(f"window {where} seed {seed} done", flush=True)
 
 
@@ -178,6 +178,7 @@ def main() -> None:
     parser.add_argument("--budget", type=int, default=300, help="simulations per run")
     parser.add_argument("--duration", type=float, default=4.0, help="simulated seconds")
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--tasks", nargs="+", choices=TASKS, default=list(TASKS))
     parser.add_argument("--window-budget", type=int, default=600, help="simulations, window")
     parser.add_argument(
         "--rq",

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
@@ -24,7 +25,7 @@ def trade_off_table(results: dict[str, Any]) -> list[str]:
         lines += [
             f"\n{preset}",
             "| method | normalised HV (mean ± std) | by seed | raw HV | "
-            "best speed | final diversity | simulations |",
+            "best fitness | final diversity | simulations |",
             "| --- | ---: | --- | ---: | ---: | ---: | ---: |",
         ]
         names = list(next(iter(seeds.values()))["runs"])
@@ -73,10 +74,14 @@ def window_table(results: dict[str, Any]) -> list[str]:
 
 
 def _lines(ax: Any, curves: dict[str, list[tuple[list[float], list[float]]]]) -> None:
-    """Each method's curves (one a seed) in one colour, labelled once."""
+    """Each method in one colour: its seeds thin, their mean (each seed's last value at or
+    before every x of a common grid) thick, labelled once."""
     for k, (name, seeds) in enumerate(curves.items()):
-        for n, (x, y) in enumerate(seeds):
-            ax.plot(x, y, lw=1, alpha=0.8, color=f"C{k}", label=name if n == 0 else None)
+        for x, y in seeds:
+            ax.plot(x, y, lw=0.6, alpha=0.3, color=f"C{k}")
+        grid = np.linspace(max(x[0] for x, _ in seeds), min(x[-1] for x, _ in seeds), 200)
+        at = [np.asarray(y)[np.searchsorted(x, grid, side="right") - 1] for x, y in seeds]
+        ax.plot(grid, np.mean(at, axis=0), lw=2, color=f"C{k}", label=f"{name} (mean)")
     ax.legend(fontsize=7)
 
 
