@@ -10,6 +10,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -56,6 +57,8 @@ class Driving:
 
 class RunDriver(Hooks):
     """Drives one run while its coordinator holds the lease; the step's persistence hooks."""
+
+    alarm: threading.Event  # always set up here (Hooks allows none)
 
     def __init__(self, driving: Driving, run_id: int) -> None:
         self.driving = driving
@@ -147,7 +150,7 @@ class RunDriver(Hooks):
         self.written = time.monotonic()
         self._fenced(store.driving.save_fitness, generation, landed, births)
 
-    def _fenced(self, write, *args):  # type: ignore[no-untyped-def]
+    def _fenced(self, write: Callable[..., Any], *args: Any) -> Any:
         """`write(db, run, lease, *args)`; a lost lease stops the driver."""
         try:
             return write(self.db, self.run_id, self.driving.lease, *args)

@@ -234,7 +234,7 @@ def _default_map(merged: dict[str, Any], request: dict[str, Any]) -> None:
         merged["descriptors"] = merged.get("descriptors") or qd["descriptors"]
     descriptors = merged.get("descriptors")
     given = isinstance(descriptors, list | tuple) and descriptors and "bins" not in request
-    if given and len(merged.get("bins") or ()) != len(descriptors):
+    if given and descriptors and len(merged.get("bins") or ()) != len(descriptors):
         merged["bins"] = [qd["bins"][0]] * len(descriptors)
 
 

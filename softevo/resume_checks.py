@@ -276,6 +276,7 @@ def _check_births(config: RunConfig, encoding: Encoding, state: GAState) -> None
         f"{told} (the births of {state.generation} generations)",
         kept.get("told") if isinstance(kept, dict) else kept,
     )
+    assert isinstance(kept, dict)  # else _expect raised
     births = kept.get("births")
     _expect(
         isinstance(births, list)
@@ -292,6 +293,7 @@ def _check_births(config: RunConfig, encoding: Encoding, state: GAState) -> None
         f"a list of {size} births (the window)",
         window,
     )
+    assert isinstance(window, list)  # else _expect raised
     for i, item in enumerate(window):
         where = f"state.json: data.steady.window[{i}]"
         _expect(

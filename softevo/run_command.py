@@ -63,6 +63,7 @@ def _not_anothers(args: argparse.Namespace, out: Path, config: RunConfig) -> Non
 
 def _folder(args: argparse.Namespace) -> Folder:
     """The run to do and its folder: a new one, or (--resume) a stopped one."""
+    parser: argparse.ArgumentParser = args.parser  # its error() exits
     from sqlalchemy.exc import SQLAlchemyError
 
     from softevo import run_store
@@ -72,22 +73,22 @@ def _folder(args: argparse.Namespace) -> Folder:
         if args.out is not None:
             given.append("--out")
         if given:
-            args.parser.error(f"--resume takes the run's own config; drop {', '.join(given)}")
+            parser.error(f"--resume takes the run's own config; drop {', '.join(given)}")
         folder = Path(args.resume)
         try:
             if not folder.is_dir():
                 raise ValueError(f"{folder}: not a resumable `softevo run` folder (not a folder)")
             return run_store.resume(_writable(args, folder), args.generations)
         except ResumeError as error:
-            args.parser.error(f"--resume {folder}/{error}")
+            parser.error(f"--resume {folder}/{error}")
         except ValueError as error:
-            args.parser.error(f"--resume {error}")
+            parser.error(f"--resume {error}")
         except (OSError, SQLAlchemyError) as error:  # a full disk while importing a folder
-            args.parser.error(f"--resume {folder}: cannot write its store ({_reason(error)})")
+            parser.error(f"--resume {folder}: cannot write its store ({_reason(error)})")
     try:
         config = resolve(request_of(args), new=True)
     except ConfigError as error:
-        args.parser.error(str(error))
+        parser.error(str(error))
     for note in breeding_notes(config):
         print(f"softevo run: note: {note}", file=sys.stderr)
     out = Path(args.out) if args.out else default_out(config)
@@ -95,7 +96,7 @@ def _folder(args: argparse.Namespace) -> Folder:
     try:
         return run_store.new(_writable(args, out), config)
     except (ValueError, OSError, SQLAlchemyError) as error:
-        args.parser.error(f"--out {out}: cannot start the run's store ({_reason(error)})")
+        parser.error(f"--out {out}: cannot start the run's store ({_reason(error)})")
 
 
 def _reason(error: BaseException) -> str:

@@ -152,7 +152,11 @@ def _draw(scene: _Scene, ax: Any, positions: np.ndarray, clock: str | None) -> N
     (polygons, tiles), (screen, colours) = _polygons(scene, positions)
     # An array [N, 4, 2] takes PolyCollection's fast path; its stub knows only a Sequence
     ax.add_collection(
-        PolyCollection(polygons, facecolors=tiles, edgecolors="none")  # type: ignore[arg-type]
+        PolyCollection(
+            polygons,  # type: ignore[arg-type]  # an array [N, 4, 2], as said above
+            facecolors=tiles,
+            edgecolors="none",
+        )
     )
     ax.add_collection(
         PolyCollection(

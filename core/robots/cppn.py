@@ -158,7 +158,8 @@ class Network:
         for link in self.connections:
             if link.enabled:
                 incoming[link.target].add(link.source)
-        done, order = set(range(N_IN)), []
+        done: set[int] = set(range(N_IN))
+        order: list[int] = []
         while len(order) < len(incoming):
             ready = [n for n in sorted(incoming) if n not in done and incoming[n] <= done]
             if not ready:
@@ -202,7 +203,6 @@ def activate(name: str, x: np.ndarray) -> np.ndarray:
 def box_inputs(shape: tuple[int, int, int]) -> np.ndarray:
     """[N_IN, V] inputs at every voxel centre, x fastest (the robots' label order)."""
     axes = [(np.arange(n) + 0.5) / n * 2 - 1 for n in shape]
-    z, y, x = np.meshgrid(axes[2], axes[1], axes[0], indexing="ij")
-    x, y, z = x.ravel(), y.ravel(), z.ravel()
+    z, y, x = (v.ravel() for v in np.meshgrid(axes[2], axes[1], axes[0], indexing="ij"))
     d = np.sqrt(x * x + y * y + z * z) / math.sqrt(3)
     return np.array([x, y, z, d, np.ones_like(x)])

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from typing import ClassVar, Protocol
@@ -148,7 +149,9 @@ class Encoding(ABC):
         real = rng.uniform(low, high) if len(self.real_bounds) else np.empty(0)
         return self.genome(discrete, real)
 
-    def genome(self, discrete: np.ndarray, real: np.ndarray) -> Genome:
+    def genome(
+        self, discrete: Sequence[int] | np.ndarray, real: Sequence[float] | np.ndarray
+    ) -> Genome:
         """Genes as Python ints and floats (`tolist` gives exactly `int(g)` and `float(g)`)."""
         return Genome(
             self.name,

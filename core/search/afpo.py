@@ -37,6 +37,7 @@ class AFPO(NSGA2):
     )
     uses = ("population", "generations", "objectives", "mutation_genes", "mutation_sigma")
     Options = SurvivorOptions
+    options: SurvivorOptions  # typed as its own, which __init__ validates
 
     @classmethod
     def check(cls, config: SearchSettings) -> None:

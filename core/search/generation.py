@@ -121,10 +121,7 @@ class Stepper:
         individuals = self.algorithm.ask(state)
         known, known_measures = hooks.individuals(generation, individuals)
         hashes = [individual.genome.hash for individual in individuals]
-        first: dict[str, int] = {}
-        for index, genome_hash in enumerate(hashes):
-            if genome_hash not in cache and genome_hash not in first:
-                first[genome_hash] = index
+        first = _first_new(hashes, cache)
         todo = [index for index in first.values() if index not in known]
         fitness = {index: known[index] for index in first.values() if index in known}
         records = {index: known_measures.get(index, {}) for index in fitness}
@@ -162,5 +159,15 @@ class Stepper:
             saved=len(individuals) - evaluations,
         )
         seconds = time.perf_counter() - started
-        evaluated = frozenset(first.values())
-        return Step(individuals, values, found, evaluated, stats, following, seconds)
+        return Step(
+            individuals, values, found, frozenset(first.values()), stats, following, seconds
+        )
+
+
+def _first_new(hashes: list[str], cache: dict[str, float]) -> dict[str, int]:
+    """Each genome the cache does not know, by hash, at the index of its first copy."""
+    first: dict[str, int] = {}
+    for index, genome_hash in enumerate(hashes):
+        if genome_hash not in cache and genome_hash not in first:
+            first[genome_hash] = index
+    return first

@@ -96,6 +96,7 @@ class MapElites(Strategy):
         "Gaussian or iso-line real steps), plus immigrants"
     )
     Options = MapElitesOptions
+    options: MapElitesOptions  # typed as its own, which __init__ validates
     uses = (
         "population",
         "generations",

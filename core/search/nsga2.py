@@ -16,7 +16,7 @@ JSON: each member's objective values and birth key.
 from __future__ import annotations
 
 import math
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
@@ -94,7 +94,7 @@ class NSGA2(Strategy):
         "NSGA-II: survivors by non-dominated rank and crowding distance over `objectives` (or "
         "the fitness), parents by binary tournament, the GA's crossover and mutation"
     )
-    uses = (
+    uses: ClassVar[tuple[str, ...]] = (
         "population",
         "generations",
         "objectives",
@@ -104,6 +104,7 @@ class NSGA2(Strategy):
         "mutation_sigma",
     )
     Options = SurvivorOptions
+    options: SurvivorOptions  # typed as its own, which __init__ validates
     reads_objectives = True
 
     def kept(

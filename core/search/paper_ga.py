@@ -82,6 +82,7 @@ class PaperGA(Strategy):
         "elitism",
     )
     Options = GAOptions
+    options: GAOptions  # typed as its own, which __init__ validates
 
     def __init__(self, config: SearchSettings, encoding: Encoding) -> None:
         super().__init__(config, encoding)

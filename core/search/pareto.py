@@ -158,7 +158,7 @@ def _dominated_by_any(front: np.ndarray, block: np.ndarray) -> np.ndarray:
         return np.zeros(len(block), dtype=bool)
     at_least = (front[:, None, :] >= block[None, :, :]).all(axis=2)
     better = (front[:, None, :] > block[None, :, :]).any(axis=2)
-    return (at_least & better).any(axis=0)
+    return np.asarray((at_least & better).any(axis=0), dtype=bool)
 
 
 def crowding_distance(values: np.ndarray) -> np.ndarray:

@@ -83,7 +83,7 @@ class GenerationStats:
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> GenerationStats:
-        values = {k: (from_null(v) if v is None else v) for k, v in data.items()}
+        values: dict[str, Any] = {k: (from_null(v) if v is None else v) for k, v in data.items()}
         return cls(**values)
 
 

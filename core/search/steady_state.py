@@ -116,6 +116,7 @@ class SteadyState(Strategy):
         "immigrants",
     )
     Options = SteadyStateOptions
+    options: SteadyStateOptions  # typed as its own, which __init__ validates
     streaming: ClassVar[bool] = True
 
     @classmethod
@@ -190,7 +191,7 @@ class SteadyState(Strategy):
             return Individual(self.encoding.random(rng), "random")
         if rng.random() < config.immigrants:
             return Individual(self.encoding.random(rng), "immigrant")
-        if self.options.parents == "archive" and nursery.archive is not None:  # type: ignore[attr-defined]
+        if self.options.parents == "archive" and nursery.archive is not None:
             elites = nursery.archive.ordered()
             if elites:
                 picks = [elites[int(i)] for i in rng.integers(0, len(elites), size=2)]
@@ -199,10 +200,10 @@ class SteadyState(Strategy):
                 born = [elite.generation * config.population + elite.index for elite in picks]
                 return replace(child, parents=tuple(born[i] for i in child.parents))
         fitness = np.asarray(nursery.fitness, dtype=np.float64)
-        picks = operators.tournament(fitness, 2, config.tournament_size, rng)
-        pair = (nursery.population[picks[0]], nursery.population[picks[1]])
+        chosen = operators.tournament(fitness, 2, config.tournament_size, rng)
+        pair = (nursery.population[chosen[0]], nursery.population[chosen[1]])
         child = mate(config, self.encoding, pair, (0, 1), rng, children=1)[0]
-        return replace(child, parents=tuple(nursery.births[int(picks[i])] for i in child.parents))
+        return replace(child, parents=tuple(nursery.births[int(chosen[i])] for i in child.parents))
 
 
 @dataclass
@@ -231,7 +232,7 @@ class Nursery:
         self.worst = [(_rank(value), number, slot) for slot, (value, number) in enumerate(ranked)]
         heapq.heapify(self.worst)
         self.archive = None  # the archive as it stands, when parents are drawn from it
-        if self.strategy.options.parents == "archive":  # type: ignore[attr-defined]
+        if self.strategy.options.parents == "archive":
             config = self.strategy.config
             kept = self.state.archive or Archive(config.descriptors, config.bins)
             self.archive = kept.copy()

@@ -59,6 +59,8 @@ class Strategy(ABC):
     uses: ClassVar[tuple[str, ...]] = ("population", "generations")
     #: This strategy's own settings, validated from the run config's `options`.
     Options: ClassVar[type[BaseModel]] = NoOptions
+    #: `Options` validated; a strategy declares it as its own type (`options: ItsOptions`)
+    options: BaseModel
     #: Whether `tell` hands `kept` each individual's objective values (NSGA-II, AFPO; the GA
     #: with `weights` sets it per instance, from its options).
     reads_objectives: bool = False
@@ -151,7 +153,7 @@ class Strategy(ABC):
         vectors = None  # each individual's objective values, computed once for all who read them
         if objectives or self.reads_objectives:
             vectors = objective_values(objectives, records, values)
-        if objectives:
+        if vectors is not None and objectives:
             front = _front(state.data, vectors)
             data = {**(state.data or {}), FRONT_KEY: front.tolist()}
             volume = pareto.hypervolume(front, reference_point(objectives))

@@ -42,13 +42,13 @@ def mate(
     `children=1` leaves out the second child's mutation, the last draws: the first child is
     the same (steady-state keeps one child a birth and draws nothing after it)."""
     if encoding.variation is not None:
-        crossed, bred = encoding.variation.mate(config, pair[0].genome, pair[1].genome, rng)
+        crossed, own = encoding.variation.mate(config, pair[0].genome, pair[1].genome, rng)
         return [
             Individual(genome, label, _parents(crossed, indices, k))
-            for k, (genome, label) in enumerate(bred)
+            for k, (genome, label) in enumerate(own)
         ]
     operator, (a, ra), (b, rb) = _crossed(config, encoding, pair, rng)
-    bred = []
+    bred: list[Individual] = []
     for k, (discrete, real) in enumerate(((a, ra), (b, rb))[:children]):
         label = operator
         if rng.random() < config.mutation_probability:

@@ -64,19 +64,20 @@ def _spec(item: Any, position: int) -> ObjectiveSpec:
     if isinstance(item, ObjectiveSpec):
         return item
     if isinstance(item, str):
-        measure, goal = (item[1:], "min") if item.startswith("-") else (item, "max")
-        item = {"measure": measure, "goal": goal}
+        item = {"measure": item[1:], "goal": "min"} if item.startswith("-") else {"measure": item}
     if not isinstance(item, dict):
         raise ValueError(f"{where}: a measure name or an object, got {item!r}")
     unknown = sorted(set(item) - {"measure", "goal", "reference"})
     if unknown:
         raise ValueError(f"{where}: unknown key {unknown[0]!r} (measure, goal, reference)")
-    measure = item.get("measure")
-    if measure not in MEASURES:
-        raise ValueError(f"{where}: unknown measure {measure!r} (measures: {', '.join(MEASURES)})")
-    goal = item.get("goal") or "max"
-    if goal not in ("max", "min"):
-        raise ValueError(f"{where}: goal must be 'max' or 'min', got {goal!r}")
+    named = item.get("measure")
+    if named not in MEASURES:
+        raise ValueError(f"{where}: unknown measure {named!r} (measures: {', '.join(MEASURES)})")
+    measure: str = named
+    given = item.get("goal") or "max"
+    if given not in ("max", "min"):
+        raise ValueError(f"{where}: goal must be 'max' or 'min', got {given!r}")
+    goal: Literal["max", "min"] = "min" if given == "min" else "max"
     reference = item.get("reference")
     if reference is None:  # absent or null: the measure's default
         reference = MEASURES[measure][2]
