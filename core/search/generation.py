@@ -126,23 +126,9 @@ class Stepper:
         fitness = {index: known[index] for index in first.values() if index in known}
         records = {index: known_measures.get(index, {}) for index in fitness}
         if todo:
-            files = [self.robot_file(individuals[i]) for i in todo]
-
-            def landed(positions: list[int], result: BatchResult) -> None:
-                indices = [todo[p] for p in positions]
-                records.update(zip(indices, result.records(), strict=True))
-                hooks.batch(generation, indices, result)
-
-            values = evaluate_in_batches(
-                evaluator,
-                files,
-                f"{key}-gen{generation}",
-                batch_size=self.batch_size,
-                in_flight=self.in_flight,
-                check=hooks.check,
-                on_batch=landed,
-                alarm=hooks.alarm,
-                names=[hashes[i] for i in todo],  # a robot file is its genome's, in one run
+            batch = _Batch(generation, key, todo, [hashes[i] for i in todo])
+            values = self._evaluate(
+                batch, [individuals[i] for i in todo], evaluator, hooks, records
             )
             fitness.update(zip(todo, values.tolist(), strict=True))
         cache.update({hashes[index]: value for index, value in fitness.items()})
@@ -163,6 +149,35 @@ class Stepper:
             individuals, values, found, frozenset(first.values()), stats, following, seconds
         )
 
+    def _evaluate(
+        self,
+        batch: _Batch,
+        individuals: list[Individual],
+        evaluator: Evaluator,
+        hooks: Hooks,
+        records: dict[int, Any],
+    ) -> np.ndarray:
+        """Simulate the generation's new genomes (`batch.todo`, by index), in batches whose
+        records and fitness the hooks see as they land."""
+        files = [self.robot_file(individual) for individual in individuals]
+
+        def landed(positions: list[int], result: BatchResult) -> None:
+            indices = [batch.todo[p] for p in positions]
+            records.update(zip(indices, result.records(), strict=True))
+            hooks.batch(batch.generation, indices, result)
+
+        return evaluate_in_batches(
+            evaluator,
+            files,
+            f"{batch.key}-gen{batch.generation}",
+            batch_size=self.batch_size,
+            in_flight=self.in_flight,
+            check=hooks.check,
+            on_batch=landed,
+            alarm=hooks.alarm,
+            names=batch.names,  # a robot file is its genome's, in one run
+        )
+
 
 def _first_new(hashes: list[str], cache: dict[str, float]) -> dict[str, int]:
     """Each genome the cache does not know, by hash, at the index of its first copy."""
@@ -171,3 +186,13 @@ def _first_new(hashes: list[str], cache: dict[str, float]) -> dict[str, int]:
         if genome_hash not in cache and genome_hash not in first:
             first[genome_hash] = index
     return first
+
+
+@dataclass(frozen=True)
+class _Batch:
+    """A generation's genomes to simulate: their indices and hashes, and the batches' key."""
+
+    generation: int
+    key: str
+    todo: list[int]
+    names: list[str]
