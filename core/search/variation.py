@@ -202,11 +202,10 @@ def _pair(
     rate: float,
     rng: np.random.Generator,
 ) -> list[Individual]:
-    own = getattr(encoding, "mate", None)
-    if own is not None:
-        return own(config, pair, indices, rng)
+    if encoding.variation is not None:  # its own operators (cppn: NEAT), as `mate` breeds
+        return mate(config, encoding, pair, indices, rng)
     operator, *genes = _crossed(config, encoding, pair, rng)
-    bred = []
+    bred: list[Individual] = []
     for k, (discrete, real) in enumerate(genes):
         discrete, real = _mutated(config, encoding, discrete, real, rate, rng)
         parents = indices if operator == "crossover" else (indices[k],)
@@ -250,9 +249,8 @@ def _mutant(
     rate: float,
     rng: np.random.Generator,
 ) -> Individual:
-    own = getattr(encoding, "mutate", None)
-    if own is not None:
-        return own(config, parent, index, rng)
+    if encoding.variation is not None:  # its own operators, as `mutant` mutates
+        return mutant(config, encoding, parent, index, rng)
     discrete, real = np.array(parent.genome.discrete), np.array(parent.genome.real)
     discrete, real = _mutated(config, encoding, discrete, real, rate, rng)
     return Individual(encoding.genome(discrete, real), "copy+mutation", (index,))
