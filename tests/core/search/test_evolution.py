@@ -63,9 +63,10 @@ def test_a_robot_that_cannot_be_built_fails_with_nan_not_zero() -> None:
 
 @pytest.mark.slow
 def test_evolution_beats_random_search_on_the_same_budget(pool) -> None:
-    """Measured when written: GA best / random best = 1.21, 1.63, 1.19, 1.29, 0.94, 1.77."""
+    """GA best / random best, measured 2026-12-07 (quick, physical profile): 1.55, 1.14, 1.22,
+    1.79 for seeds 0-3 (seeds 4 and 5 gave 1.25 and 1.20; four keep the suite's time)."""
     ratios = []
-    for seed in range(6):
+    for seed in range(4):
         config = resolve({"preset": "quick", "seed": seed})
         evolution = Evolution.start(config)
         evolution.run(pool)
@@ -76,4 +77,4 @@ def test_evolution_beats_random_search_on_the_same_budget(pool) -> None:
         ]
         ratios.append(evolution.best_robot()[1] / np.nanmax(pool.evaluate_batch(randoms).fitness))
     assert np.mean(ratios) > 1.1, ratios
-    assert sum(r > 1 for r in ratios) >= 4, ratios
+    assert sum(r > 1 for r in ratios) >= 3, ratios
