@@ -144,3 +144,5 @@ class IndividualRow(Base):
 RUNS = cast(Table, RunRow.__table__)
 GENERATIONS = cast(Table, GenerationRow.__table__)
 INDIVIDUALS = cast(Table, IndividualRow.__table__)
+#: `individuals.status` of an individual bred but not evaluated yet, as the statements write it
+PENDING = IndividualStatus.PENDING.value

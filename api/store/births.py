@@ -6,7 +6,7 @@ from __future__ import annotations
 from sqlalchemy import select
 
 from softevo.api.db import Database
-from softevo.api.store.driving import _PENDING, INDIVIDUALS
+from softevo.api.models import INDIVIDUALS, PENDING
 from softevo.core.nulls import from_null, from_null_record
 
 
@@ -31,8 +31,8 @@ def stored_births(
     return {
         (generation, index): (
             genome_hash,
-            None if status == _PENDING else from_null(fitness),
-            {} if status == _PENDING else from_null_record(measures),
+            None if status == PENDING else from_null(fitness),
+            {} if status == PENDING else from_null_record(measures),
         )
         for generation, index, genome_hash, status, fitness, measures in rows
     }

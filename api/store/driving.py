@@ -16,7 +16,7 @@ from typing import Any
 from sqlalchemy import Connection, bindparam, insert, select, update
 
 from softevo.api.db import Database, EncodedJSON
-from softevo.api.models import GENERATIONS, INDIVIDUALS, RUNS, IndividualRow, RunRow
+from softevo.api.models import GENERATIONS, INDIVIDUALS, PENDING, RUNS, IndividualRow, RunRow
 from softevo.api.store import leases
 from softevo.api.store.fitness_rows import Landed, fitness_rows, set_fitness
 from softevo.api.store.runs import now
@@ -38,7 +38,6 @@ CURVE_FIELDS = (
     "evaluations",
     "saved",
 )
-_PENDING = IndividualStatus.PENDING.value
 
 
 @dataclass(frozen=True)
@@ -198,13 +197,13 @@ _INSERT_MEMBER = DriverStatement(
         run_id=bindparam("b_run"),
         generation=bindparam("b_generation"),
         index=bindparam("b_index"),
-        status=_PENDING,
+        status=PENDING,
         **{column: bindparam(f"b_{column}") for column in MEMBER_COLUMNS},
     ),
     postgres_rows=f"""
     INSERT INTO individuals (run_id, generation, "index", status, genome, genome_hash, operator,
                              parents)
-    SELECT %(b_run)s, %(b_generation)s, m.b_index, '{_PENDING}', m.b_genome::json,
+    SELECT %(b_run)s, %(b_generation)s, m.b_index, '{PENDING}', m.b_genome::json,
            m.b_genome_hash, m.b_operator, m.b_parents::json
     FROM ROWS FROM (json_to_recordset(%(b_rows)s::json) AS (b_index integer, b_genome text,
         b_genome_hash text, b_operator text, b_parents text)) WITH ORDINALITY

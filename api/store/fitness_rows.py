@@ -11,13 +11,11 @@ from typing import Any
 from sqlalchemy import Connection, bindparam, update
 
 from softevo.api.db import EncodedJSON
-from softevo.api.models import INDIVIDUALS
+from softevo.api.models import INDIVIDUALS, PENDING
 from softevo.api.store.runs import now
 from softevo.api.store.statements import DriverStatement
 from softevo.core.nulls import Record, record_text, to_null
 from softevo.core.status import IndividualStatus
-
-_PENDING = IndividualStatus.PENDING.value
 
 _SET_FITNESS = DriverStatement(
     update(INDIVIDUALS)
@@ -25,7 +23,7 @@ _SET_FITNESS = DriverStatement(
         INDIVIDUALS.c.run_id == bindparam("b_run"),
         INDIVIDUALS.c.generation == bindparam("b_generation"),
         INDIVIDUALS.c["index"] == bindparam("b_index"),
-        INDIVIDUALS.c.status == _PENDING,  # never a second fitness
+        INDIVIDUALS.c.status == PENDING,  # never a second fitness
     )
     .values(
         fitness=bindparam("b_fitness"),
@@ -42,7 +40,7 @@ _SET_FITNESS = DriverStatement(
     FROM json_to_recordset(%(b_rows)s::json) AS v(b_index integer, b_fitness float8,
         b_measures text, b_status text, b_seconds float8, b_worker text, b_at timestamptz)
     WHERE individuals.run_id = %(b_run)s AND individuals.generation = %(b_generation)s
-        AND individuals."index" = v.b_index AND individuals.status = '{_PENDING}'""",
+        AND individuals."index" = v.b_index AND individuals.status = '{PENDING}'""",
     scalars=("b_run", "b_generation"),
 )
 
