@@ -59,10 +59,11 @@ class WatchedSimpleWorker(SimpleWorker):
         key = job.args[0] if job.args and isinstance(job.args[0], str) else None
         robots = len(job.args[1]) if len(job.args) > 1 and isinstance(job.args[1], list) else 0
         with contextlib.suppress(RedisError):
+            # failed before it is said: whoever reads the result finds the job failed
+            self.handle_job_failure(job, queue, exc_string=message, execution=self.execution)
             if key is not None:
                 payload = {"error": message, "worker": self.name, "seconds": seconds}
                 push_result(self.connection, key, {**payload, "robots": robots, "job": job.id})
-            self.handle_job_failure(job, queue, exc_string=message, execution=self.execution)
             self.register_death()
         restart()
 

@@ -94,7 +94,7 @@ def test_the_first_job_pays_no_compilation(redis_server, workers, tmp_path, monk
     files = [robot_to_json(evolution.robot(item)) for item in evolution.individuals()]
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba-cache"))  # empty: it compiles
     workers.start("warm")
-    workers.wait_ready("warm")
+    workers.wait_ready("warm", timeout=240)  # compiling, beside the rest of the suite
     warm = float(re.search(r"kernels warm \(([\d.]+) s\)", workers.log("warm")).group(1))
     evaluator = RQEvaluator(redis_server.url)
     try:

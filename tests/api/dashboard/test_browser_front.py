@@ -27,6 +27,8 @@ def test_an_nsga2_run_shows_its_front_and_replays_a_picked_point(
     page.wait_for_function("window.softevo.front && window.softevo.replay", timeout=30000)
     front = server.get(f"/runs/{run_id}/front").json()
     assert page.evaluate("window.softevo.front.points.length") == len(front["points"]) >= 1
+    # every robot drawn: the axes scale to them all, so a point moves until the last is in
+    page.wait_for_function(f"window.softevo.frontDots === {len(measured(server, run_id))}")
     target = front["points"][-1]
     point = page.evaluate(
         """(id) => {
@@ -48,6 +50,12 @@ def test_an_nsga2_run_shows_its_front_and_replays_a_picked_point(
     readable(page, server, run_id)
 
 
+def measured(service: httpx.Client, run_id: int) -> list[dict]:
+    """The robots the scatter draws: every one evaluated, survivors (drawn already) left out."""
+    listed = service.get(f"/runs/{run_id}/individuals", params={"limit": 1000}).json()["items"]
+    return [i for i in listed if i["fitness"] is not None and i["operator"] != "survivor"]
+
+
 def readable(browser: Any, service: httpx.Client, run_id: int) -> None:
     """What issue 48 asked of the page of an nsga2 run and of the runs list."""
     task = browser.text_content("#task")
@@ -55,8 +63,7 @@ def readable(browser: Any, service: httpx.Client, run_id: int) -> None:
     assert "cost of transport (dimensionless), lower is better" in task
     assert "nsga2" in browser.text_content("h2")
     listed = service.get(f"/runs/{run_id}/individuals", params={"limit": 1000}).json()["items"]
-    measured = [i for i in listed if i["fitness"] is not None and i["operator"] != "survivor"]
-    assert browser.evaluate("window.softevo.frontDots") == len(measured)
+    assert browser.evaluate("window.softevo.frontDots") == len(measured(service, run_id))
     curve = service.get(f"/runs/{run_id}/curve").json()["generations"]
     spent = [sum(r["evaluations"] for r in curve[: g + 1]) for g in range(len(curve))]
     assert browser.evaluate("window.softevo.charts.hypervolume.data[0]") == spent
