@@ -190,7 +190,14 @@ def _saved_fitness(engine: Engine, run_id: int, generation: int) -> list[tuple[A
 
 @pytest.mark.slow
 @pytest.mark.fault
-@pytest.mark.parametrize("request_body", [REQUEST, QD_REQUEST], ids=["ga", "map-elites"])
+#: Each database once and each algorithm once (all four pairs cost the suite 74 s more); the
+#: random kills below and the database fault tests cover the rest of the grid.
+@pytest.mark.parametrize(
+    ("database_url", "request_body"),
+    [("sqlite", REQUEST), ("postgres", QD_REQUEST)],
+    ids=["sqlite-ga", "postgres-map-elites"],
+    indirect=["database_url"],
+)
 def test_sigkill_mid_generation_then_restart_resumes_with_the_same_curve(
     start_server: Callable[[], Server], engine: Engine, request_body: dict[str, Any]
 ) -> None:
@@ -329,6 +336,7 @@ def test_a_steady_state_run_sigkilled_mid_row_resumes_with_the_same_curve(
 
 @pytest.mark.slow
 @pytest.mark.fault
+@pytest.mark.parametrize("database_url", ["sqlite"], indirect=True)  # PostgreSQL: above
 def test_sigkill_again_and_again_at_random_moments(
     start_server: Callable[[], Server], engine: Engine
 ) -> None:

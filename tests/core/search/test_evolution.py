@@ -63,10 +63,10 @@ def test_a_robot_that_cannot_be_built_fails_with_nan_not_zero() -> None:
 
 @pytest.mark.slow
 def test_evolution_beats_random_search_on_the_same_budget(pool) -> None:
-    """GA best / random best, measured 2026-12-07 (quick, physical profile): 1.55, 1.14, 1.22,
-    1.79 for seeds 0-3 (seeds 4 and 5 gave 1.25 and 1.20; four keep the suite's time)."""
+    """GA best / random best, measured 2026-12-07 (quick, physical profile): 1.55, 1.14, 1.22
+    for seeds 0-2 (seeds 3-5 gave 1.79, 1.25 and 1.20; three keep the suite's time)."""
     ratios = []
-    for seed in range(4):
+    for seed in range(3):
         config = resolve({"preset": "quick", "seed": seed})
         evolution = Evolution.start(config)
         evolution.run(pool)
@@ -77,4 +77,4 @@ def test_evolution_beats_random_search_on_the_same_budget(pool) -> None:
         ]
         ratios.append(evolution.best_robot()[1] / np.nanmax(pool.evaluate_batch(randoms).fitness))
     assert np.mean(ratios) > 1.1, ratios
-    assert sum(r > 1 for r in ratios) >= 3, ratios
+    assert all(r > 1 for r in ratios), ratios
