@@ -16,22 +16,20 @@ JSON: each member's objective values and birth key.
 from __future__ import annotations
 
 import math
-from typing import Any, ClassVar, Literal
+from typing import Any, ClassVar
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import Field
 
 from softevo.core.nulls import from_nulls, to_nulls
 from softevo.core.search import pareto
 from softevo.core.search.state import GAState, Individual
 from softevo.core.search.strategy import Strategy
-from softevo.core.search.variation import explore_children, mate
+from softevo.core.search.variation import VariationOptions, explore_children, mate
 
 
-class SurvivorOptions(BaseModel):
-    """The share of a generation that survives into the next."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
+class SurvivorOptions(VariationOptions):
+    """The share of a generation that survives into the next, and how children are made."""
 
     survivors: float = Field(
         0.5,
@@ -39,20 +37,6 @@ class SurvivorOptions(BaseModel):
         lt=1,
         description="fraction of each generation kept (by the algorithm's selection) into the "
         "next; the rest of the next are new",
-    )
-    variation: Literal["paper", "explore"] = Field(
-        "paper",
-        description="paper: the GA's operators (mutation_probability, mutation_genes), as runs "
-        "stored before issue 51; explore (what new runs get): every child mutated gene by gene, "
-        "mutated_genes genes on average, and a child repeating a genome already met re-drawn "
-        "(docs/evolution.md)",
-    )
-    mutated_genes: float = Field(
-        1.0,
-        gt=0,
-        le=1000,
-        description="explore: genes changed per child on average (a rate of mutated_genes / n "
-        "per gene of a genome of n)",
     )
 
 

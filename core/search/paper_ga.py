@@ -16,6 +16,10 @@ minimised one negated; NaN if any is missing) instead of the fitness. The fitnes
 and the curve stay `objective`'s, and the front is kept beside it as for any algorithm, so a
 weighted GA and NSGA-II are compared on the same front. The sums of the last generation are kept
 in `GAState.data` (`weighted`), so a resumed run selects as the undisturbed one.
+
+Option `variation` "explore" (issue 51, `softevo.core.search.variation`): step 3's children are
+mutated gene by gene and a repeat of a genome already met is re-drawn; immigrants stay random.
+The default is the paper's operators, for new runs too: every ga preset is the paper's.
 """
 
 from __future__ import annotations
@@ -24,14 +28,14 @@ import math
 from typing import TYPE_CHECKING
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import Field, field_validator
 
 from softevo.core.nulls import from_nulls, to_nulls
 from softevo.core.robots.encodings import Encoding
 from softevo.core.search import operators
 from softevo.core.search.state import GAState, Individual
 from softevo.core.search.strategy import Strategy
-from softevo.core.search.variation import mate
+from softevo.core.search.variation import VariationOptions, explore_children, mate
 
 if TYPE_CHECKING:
     from softevo.core.search.settings import SearchSettings
@@ -41,10 +45,9 @@ if TYPE_CHECKING:
 WEIGHTED_KEY = "weighted"
 
 
-class GAOptions(BaseModel):
-    """The GA's own setting: an optional weighted sum of the objectives to select on."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
+class GAOptions(VariationOptions):
+    """The GA's own settings: an optional weighted sum of the objectives to select on, and how
+    children are made (the paper's operators unless `variation` is explore)."""
 
     weights: list[float] | None = Field(
         None,
@@ -139,15 +142,30 @@ class PaperGA(Strategy):
             mates = operators.tournament(fitness, n_parents, config.tournament_size, rng)
         else:
             mates = operators.roulette(fitness, n_parents, rng)
-        children: list[Individual] = []
-        for first, second in mates.reshape(-1, 2):
-            pair = (parents[first], parents[second])
-            children.extend(mate(config, encoding, pair, (first, second), rng))
+        children = self.children(parents, mates, n_children, rng)
         return [
             *(Individual(parents[i].genome, "survivor", (int(i),)) for i in survivors),
             *children[:n_children],
             *(Individual(encoding.random(rng), "immigrant") for _ in range(config.n_immigrants)),
         ]
+
+    def children(
+        self,
+        parents: list[Individual],
+        mates: np.ndarray,
+        count: int,
+        rng: np.random.Generator,
+    ) -> list[Individual]:
+        """`count` children of the pairs `mates`, by the paper's operators or exploring ones."""
+        config, encoding = self.config, self.encoding
+        if self.options.variation == "explore":
+            mutated = self.options.mutated_genes
+            return explore_children(config, encoding, parents, mates, count, mutated, rng)
+        children: list[Individual] = []
+        for first, second in mates.reshape(-1, 2):
+            pair = (parents[first], parents[second])
+            children.extend(mate(config, encoding, pair, (first, second), rng))
+        return children[:count]
 
 
 def room_for_children(config: SearchSettings) -> None:

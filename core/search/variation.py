@@ -2,8 +2,8 @@
 parents, and a mutant of one; and variation that explores (issue 51). All draw only from the
 generator they are given, so a run stays the same for any number of workers.
 
-Exploring variation is for NSGA-II and AFPO with options variation 'explore':
-every child mutated gene by gene, `mutated_genes` genes changed on average (1 of the genome's n
+Exploring variation is for any strategy with options variation 'explore' (`VariationOptions`;
+new NSGA-II and AFPO runs get it): every child mutated gene by gene, `mutated_genes` genes changed on average (1 of the genome's n
 by default: a rate of 1/n per gene; labels redrawn to another value, real genes stepped by a
 Gaussian of `mutation_sigma` x their range), and a child that repeats a genome already met (the
 parents' generation, or an earlier child of this one) re-drawn, up to `REDRAWS` times, instead of
@@ -15,9 +15,10 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from functools import partial
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
 
 from softevo.core.robots.encodings import Encoding
 from softevo.core.search import operators
@@ -25,6 +26,27 @@ from softevo.core.search.state import Individual
 
 if TYPE_CHECKING:
     from softevo.core.search.settings import SearchSettings
+
+
+class VariationOptions(BaseModel):
+    """How a strategy's children are made: the options every strategy that breeds takes."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
+
+    variation: Literal["paper", "explore"] = Field(
+        "paper",
+        description="paper: the GA's operators (mutation_probability, mutation_genes), as runs "
+        "stored before issue 51; explore (what new nsga2 and afpo runs get): every child mutated "
+        "gene by gene, mutated_genes genes on average, and a child repeating a genome already "
+        "met re-drawn (docs/evolution.md)",
+    )
+    mutated_genes: float = Field(
+        1.0,
+        gt=0,
+        le=1000,
+        description="explore: genes changed per child on average (a rate of mutated_genes / n "
+        "per gene of a genome of n)",
+    )
 
 
 def mate(

@@ -1,5 +1,5 @@
-"""Issue 51: NSGA-II's and AFPO's exploring variation (gene-by-gene mutation, repeats re-drawn),
-the options new runs get, the budget in simulations and the normalised hypervolume."""
+"""Issue 51: exploring variation (gene-by-gene mutation, repeats re-drawn) for NSGA-II, AFPO and
+the GA, the options new runs get, the budget in simulations and the normalised hypervolume."""
 
 from __future__ import annotations
 
@@ -63,7 +63,7 @@ def test_mutate_real_each_steps_about_rate_of_the_genes_within_bounds() -> None:
     assert stepped.min() >= 0.0 and stepped.max() <= 1.0
 
 
-@pytest.mark.parametrize("algorithm", ["nsga2", "afpo"])
+@pytest.mark.parametrize("algorithm", ["nsga2", "afpo", "ga"])
 def test_explore_keeps_more_diversity_than_the_paper_operators(algorithm: str) -> None:
     paper = Run(1, algorithm=algorithm, options={"variation": "paper"})
     explore = Run(1, algorithm=algorithm, options={"variation": "explore"})
