@@ -3,12 +3,13 @@ parents, and a mutant of one; and variation that explores (issue 51). All draw o
 generator they are given, so a run stays the same for any number of workers.
 
 Exploring variation is for any strategy with options variation 'explore' (`VariationOptions`;
-new NSGA-II and AFPO runs get it): every child mutated gene by gene, `mutated_genes` genes changed on average (1 of the genome's n
-by default: a rate of 1/n per gene; labels redrawn to another value, real genes stepped by a
-Gaussian of `mutation_sigma` x their range), and a child that repeats a genome already met (the
-parents' generation, or an earlier child of this one) re-drawn, up to `REDRAWS` times, instead of
-being counted as a birth that the cache answers for free. An encoding with operators of its own
-(`cppn`: NEAT) breeds with them, its repeats re-drawn the same way.
+new NSGA-II and AFPO runs get it): every child mutated gene by gene, `mutated_genes` genes
+changed on average (1 of the genome's n by default: a rate of 1/n per gene; labels redrawn to
+another value, real genes stepped by a Gaussian of `mutation_sigma` x their range), and a child
+that repeats a genome already met (the parents' generation, or an earlier child of this one)
+re-drawn, up to `REDRAWS` times, instead of being counted as a birth that the cache answers for
+free. An encoding with operators of its own (`cppn`: NEAT) breeds with them, its repeats
+re-drawn the same way.
 """
 
 from __future__ import annotations
