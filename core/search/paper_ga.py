@@ -145,7 +145,7 @@ class PaperGA(Strategy):
         children = self.children(parents, mates, n_children, rng)
         return [
             *(Individual(parents[i].genome, "survivor", (int(i),)) for i in survivors),
-            *children[:n_children],
+            *children,
             *(Individual(encoding.random(rng), "immigrant") for _ in range(config.n_immigrants)),
         ]
 

@@ -30,7 +30,8 @@ if TYPE_CHECKING:
 
 
 class VariationOptions(BaseModel):
-    """How a strategy's children are made: the options every strategy that breeds takes."""
+    """How children are made: the options the GA, NSGA-II and AFPO share (MAP-Elites has its
+    own variation options; steady-state breeds with the paper's operators)."""
 
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 

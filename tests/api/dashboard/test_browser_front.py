@@ -28,7 +28,8 @@ def test_an_nsga2_run_shows_its_front_and_replays_a_picked_point(
     front = server.get(f"/runs/{run_id}/front").json()
     assert page.evaluate("window.softevo.front.points.length") == len(front["points"]) >= 1
     # every robot drawn: the axes scale to them all, so a point moves until the last is in
-    page.wait_for_function(f"window.softevo.frontDots === {len(measured(server, run_id))}")
+    drawn = len(measured(listed(server, run_id)))
+    page.wait_for_function(f"window.softevo.frontDots === {drawn}")
     target = front["points"][-1]
     point = page.evaluate(
         """(id) => {
@@ -50,10 +51,14 @@ def test_an_nsga2_run_shows_its_front_and_replays_a_picked_point(
     readable(page, server, run_id)
 
 
-def measured(service: httpx.Client, run_id: int) -> list[dict]:
+def listed(service: httpx.Client, run_id: int) -> list[dict]:
+    """The run's individuals, as the page lists them (a test run holds fewer than 1000)."""
+    return service.get(f"/runs/{run_id}/individuals", params={"limit": 1000}).json()["items"]
+
+
+def measured(individuals: list[dict]) -> list[dict]:
     """The robots the scatter draws: every one evaluated, survivors (drawn already) left out."""
-    listed = service.get(f"/runs/{run_id}/individuals", params={"limit": 1000}).json()["items"]
-    return [i for i in listed if i["fitness"] is not None and i["operator"] != "survivor"]
+    return [i for i in individuals if i["fitness"] is not None and i["operator"] != "survivor"]
 
 
 def readable(browser: Any, service: httpx.Client, run_id: int) -> None:
@@ -62,15 +67,15 @@ def readable(browser: Any, service: httpx.Client, run_id: int) -> None:
     assert "objectives: speed (m/s), higher is better" in task and "fitness =" not in task
     assert "cost of transport (dimensionless), lower is better" in task
     assert "nsga2" in browser.text_content("h2")
-    listed = service.get(f"/runs/{run_id}/individuals", params={"limit": 1000}).json()["items"]
-    assert browser.evaluate("window.softevo.frontDots") == len(measured(service, run_id))
+    everyone = listed(service, run_id)
+    assert browser.evaluate("window.softevo.frontDots") == len(measured(everyone))
     curve = service.get(f"/runs/{run_id}/curve").json()["generations"]
     spent = [sum(r["evaluations"] for r in curve[: g + 1]) for g in range(len(curve))]
     assert browser.evaluate("window.softevo.charts.hypervolume.data[0]") == spent
     volumes = browser.evaluate("window.softevo.charts.hypervolume.data[1]")
     assert volumes == [r["hypervolume"] for r in curve]
     legend = "[...document.querySelectorAll('#population .u-series')].map(s => s.textContent)"
-    assert browser.evaluate(legend)[-1] == f"failed0 of {len(listed)}"  # a value, not clipped
+    assert browser.evaluate(legend)[-1] == f"failed0 of {len(everyone)}"  # a value, not clipped
     browser.goto(f"{browser.base}/#/")
     row = f"tr[data-run='{run_id}']"
     browser.wait_for_selector(row)
