@@ -176,13 +176,11 @@ export class FrontScatter {
 }
 
 // the run page's front panel (null for a run without objectives): a picked point replays its robot
-export function frontPanel(run, parent, replay, replayPanel, everyone) {
+export function frontPanel(run, parent, replay, everyone) {
   if (!run.config.objectives || !run.config.objectives.length) return null;
   return new FrontScatter(parent, run.id, (point) => {
-    replay.best = null;  // a picked robot stays on screen while the run goes on
-    replay.load(`/runs/${run.id}/individuals/${point.id}/replay`,
-      () => `front robot of generation ${point.generation}, index ${point.index}`)
-      .catch((error) => replayPanel.append(h("p", { class: "error" }, error.message)));
+    replay.pick(`/runs/${run.id}/individuals/${point.id}/replay`,
+      () => `front robot of generation ${point.generation}, index ${point.index}`);
   }, everyone);
 }
 

@@ -42,6 +42,8 @@ export class Replay {
     this.panel = panel;
     this.loaded = false;
     this.best = null;  // the generation of the best robot shown, null for a picked individual
+    this.asked = 0;  // replays asked for: only the last one asked is shown
+    this.picked = false;  // a robot the user picked: the run view stops following the best
     this.state = { frame: 0, frames: 0, time: 0, playing: false, speed: 1, renderer: null, label: "" };
     this.disposers = [];
     softevo.replay = this.state;
@@ -53,13 +55,30 @@ export class Replay {
     return data;
   }
 
-  // fetch and show apart: the run view draws a new best with the summary that names it
-  fetch(url) { return api(`${url}?fps=30`); }
+  // a robot the user clicked, kept on screen while the run goes on; an error is said in the panel
+  pick(url, label) {
+    this.best = null;
+    this.picked = true;
+    this.load(url, label).catch((error) => this.panel.append(h("p", { class: "error" }, error.message)));
+  }
 
+  // fetch and show apart: the run view draws a new best with the summary that names it
+  async fetch(url) {
+    const asked = ++this.asked;
+    return { ...(await api(`${url}?fps=30`)), asked };
+  }
+
+  // false, and nothing drawn, for a replay asked before the last one (a robot picked while the
+  // best one was being simulated stays on screen when the best one comes)
   show(data, label) {
+    if (data.asked !== this.asked) {
+      softevo.replaysDropped = (softevo.replaysDropped || 0) + 1;  // for tests
+      return false;
+    }
     this.data = data;
     this.loaded = true;
     this.build(label);
+    return true;
   }
 
   // One robot on screen: its panel, its scene drawn by the replay's one renderer, played.

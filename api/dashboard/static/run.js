@@ -29,7 +29,7 @@ export async function runView(runId) {
   onLeave(() => page.replay.dispose());
   qualityDiversity(page);
   if (page.archive) await page.archive.update();
-  page.front = frontPanel(page.run, page.charts, page.replay, page.replayPanel, () => page.individuals);
+  page.front = frontPanel(page.run, page.charts, page.replay, () => page.individuals);
   if (page.front) await page.front.update();
   page.hypervolume = hypervolumeChart(page.run, page.curve, page.charts);
   if (page.run.progress.best_fitness !== null) {
@@ -172,10 +172,8 @@ function replayClicked(page, event) {
     if (dx * dx + dy * dy < bestDistance) { bestDistance = dx * dx + dy * dy; best = page.individuals[i]; }
   });
   if (!best) return;
-  replay.best = null;  // a picked individual stays on screen while the run goes on
-  replay.load(`/runs/${runId}/individuals/${best.id}/replay`,
-    () => `individual ${best.id} (generation ${best.generation}, ${best.operator}, ${best.fitness === null ? "failed" : `${fmt(best.fitness)} ${fitness.unit}`})`)
-    .catch((error) => page.replayPanel.append(h("p", { class: "error" }, error.message)));
+  replay.pick(`/runs/${runId}/individuals/${best.id}/replay`,
+    () => `individual ${best.id} (generation ${best.generation}, ${best.operator}, ${best.fitness === null ? "failed" : `${fmt(best.fitness)} ${fitness.unit}`})`);
 }
 
 function diversityChart(page) {
@@ -196,10 +194,8 @@ function qualityDiversity(page) {
     series: [{ label: "generation" }, { label: key, stroke, width: 1.5 }],
   }, qdData(page, key), charts)]) : [];
   page.archive = qd ? new ArchiveMap(charts, runId, fitness, (cell) => {
-    page.replay.best = null;  // a picked elite stays on screen while the run goes on
-    page.replay.load(`/runs/${runId}/individuals/${cell.id}/replay`,
-      () => `elite of cell ${cell.cell.join(", ")} (generation ${cell.generation}, index ${cell.index})`)
-      .catch((error) => page.replayPanel.append(h("p", { class: "error" }, error.message)));
+    page.replay.pick(`/runs/${runId}/individuals/${cell.id}/replay`,
+      () => `elite of cell ${cell.cell.join(", ")} (generation ${cell.generation}, index ${cell.index})`);
   }) : null;
 }
 
@@ -213,7 +209,7 @@ async function showBest(page) {
   const label = FINISHED.includes(page.run.status) ? "the fastest robot" : "the fastest robot so far";
   const newer = page.run.progress.best_generation;
   const behind = newer !== null && newer > data.generation ? `; a better one, of generation ${newer}, is loading` : "";
-  replay.show(data, `${label} (generation ${data.generation}${behind})`);
+  if (!replay.show(data, `${label} (generation ${data.generation}${behind})`)) return;
   replay.best = data.generation;
   page.showSummary();
 }
@@ -255,7 +251,7 @@ async function update(page) {
   // summary's best changes with the replay's, never before it
   const following = replay.best !== null;
   const relabel = following && !["queued", "running"].includes(page.run.status) && replay.state.label.includes("so far");
-  const stale = !replay.loaded || relabel || (following && replay.best !== page.run.progress.best_generation);
+  const stale = (!replay.loaded && !replay.picked) || relabel || (following && replay.best !== page.run.progress.best_generation);
   if (stale && page.run.progress.best_fitness !== null) {
     page.replayPanel.querySelector("p.muted")?.remove();
     await showBest(page);

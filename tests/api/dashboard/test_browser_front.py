@@ -23,13 +23,15 @@ def test_an_nsga2_run_shows_its_front_and_replays_a_picked_point(
     body = {**SMALL, "algorithm": "nsga2", "objectives": ["speed", "-cost_of_transport"]}
     run_id = server.post("/runs", json=body).json()["id"]
     wait(lambda: server.get(f"/runs/{run_id}").json()["status"] == "completed", 60, "the run")
+    held: list[Any] = []  # the best robot's replay, held back until a point was picked
+    page.route("**/best/replay*", lambda route: held.append(route))
     page.goto(f"{page.base}/#/runs/{run_id}")
     page.wait_for_function("window.softevo.front && window.softevo.replay", timeout=30000)
     front = server.get(f"/runs/{run_id}/front").json()
     assert page.evaluate("window.softevo.front.points.length") == len(front["points"]) >= 1
     # every robot drawn: the axes scale to them all, so a point moves until the last is in
     drawn = len(measured(listed(server, run_id)))
-    page.wait_for_function(f"window.softevo.frontDots === {drawn}")
+    page.wait_for_function(f"window.softevo.frontDots === {drawn}", timeout=60000)
     target = front["points"][-1]
     point = page.evaluate(
         """(id) => {
@@ -45,8 +47,14 @@ def test_an_nsga2_run_shows_its_front_and_replays_a_picked_point(
     page.wait_for_function(
         f"window.softevo.replay.label.startsWith('front robot of generation "
         f"{target['generation']}, index {target['index']}')",
-        timeout=15000,
+        timeout=60000,
     )
+    picked = page.evaluate("window.softevo.replay.label")
+    while not held:  # asked for when the page was opened, so here long since
+        page.wait_for_timeout(50)
+    held[0].continue_()  # the best robot comes after the pick: the pick stays on screen
+    page.wait_for_function("window.softevo.replaysDropped === 1", timeout=60000)
+    assert page.evaluate("window.softevo.replay.label") == picked
     shot(page, "dashboard-front")
     readable(page, server, run_id)
 
