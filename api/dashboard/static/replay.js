@@ -55,11 +55,15 @@ export class Replay {
     return data;
   }
 
-  // a robot the user clicked, kept on screen while the run goes on; an error is said in the panel
+  // a robot the user clicked, kept on screen while the run goes on; an error is said in the
+  // panel, and the page follows the best robot again
   pick(url, label) {
     this.best = null;
     this.picked = true;
-    this.load(url, label).catch((error) => this.panel.append(h("p", { class: "error" }, error.message)));
+    this.load(url, label).catch((error) => {
+      this.picked = false;
+      this.panel.append(h("p", { class: "error" }, error.message));
+    });
   }
 
   // fetch and show apart: the run view draws a new best with the summary that names it

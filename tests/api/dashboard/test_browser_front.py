@@ -50,8 +50,11 @@ def test_an_nsga2_run_shows_its_front_and_replays_a_picked_point(
         timeout=60000,
     )
     picked = page.evaluate("window.softevo.replay.label")
-    while not held:  # asked for when the page was opened, so here long since
+    for _ in range(600):  # asked for when the page was opened, so here long since
+        if held:
+            break
         page.wait_for_timeout(50)
+    assert held, "the page never asked for the best robot's replay"
     held[0].continue_()  # the best robot comes after the pick: the pick stays on screen
     page.wait_for_function("window.softevo.replaysDropped === 1", timeout=60000)
     assert page.evaluate("window.softevo.replay.label") == picked
