@@ -6,6 +6,8 @@ roulette weight; nothing here treats a failure as a score of 0.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
@@ -82,12 +84,30 @@ def grouped_truncation(
     return kept_array[rank_order(fitness[kept_array])]
 
 
+#: Up to this many entrants, `tournament` compares them in Python: a steady-state birth's two
+#: tournaments would otherwise pay numpy's per-call overhead (indexing, where, argmax) each.
+FEW_ENTRANTS = 16
+
+
 def tournament(fitness: np.ndarray, n: int, size: int, rng: np.random.Generator) -> np.ndarray:
-    """`n` winners, each the best of `size` individuals drawn uniformly (NaN loses)."""
+    """`n` winners, each the best of `size` individuals drawn uniformly (NaN loses; of equals,
+    the first drawn), by the same draws however many there are."""
     entrants = rng.integers(0, len(fitness), size=(n, size))
+    if entrants.size <= FEW_ENTRANTS:
+        return np.array([_best_of(fitness, row) for row in entrants.tolist()], dtype=np.int64)
     key = fitness[entrants]  # only the entrants (2 x size values, not the population's P)
     key = np.where(np.isnan(key), -np.inf, key)
     return entrants[np.arange(n), np.argmax(key, axis=1)]
+
+
+def _best_of(fitness: np.ndarray, drawn: list[int]) -> int:
+    """The first of `drawn` with the highest fitness, NaN lowest (`np.argmax`'s choice)."""
+    best, top = drawn[0], -math.inf
+    for index in drawn:
+        value = float(fitness[index])
+        if value > top:  # NaN never is; a first -inf or NaN keeps drawn[0], as argmax does
+            best, top = index, value
+    return best
 
 
 def roulette(fitness: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:

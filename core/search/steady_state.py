@@ -199,11 +199,11 @@ class SteadyState(Strategy):
                 child = mate(config, self.encoding, pair, (0, 1), rng, children=1)[0]
                 born = [elite.generation * config.population + elite.index for elite in picks]
                 return replace(child, parents=tuple(born[i] for i in child.parents))
-        fitness = np.asarray(nursery.fitness, dtype=np.float64)
-        chosen = operators.tournament(fitness, 2, config.tournament_size, rng)
+        chosen = operators.tournament(nursery.scores(), 2, config.tournament_size, rng).tolist()
         pair = (nursery.population[chosen[0]], nursery.population[chosen[1]])
         child = mate(config, self.encoding, pair, (0, 1), rng, children=1)[0]
-        return replace(child, parents=tuple(nursery.births[int(chosen[i])] for i in child.parents))
+        parents = tuple(nursery.births[chosen[i]] for i in child.parents)
+        return Individual(child.genome, child.operator, parents)
 
 
 @dataclass
@@ -225,6 +225,8 @@ class Nursery:
     #: (rank, birth, slot) of every member, a heap: its top is the member a better birth
     #: replaces (the worst fitness, NaN lowest; of equals, the oldest birth), in O(log P)
     worst: list[tuple[float, int, int]] = field(default_factory=list, repr=False)
+    #: `fitness` as an array for the tournaments, kept in step with it (None: to be made)
+    _scores: np.ndarray | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         self.hashes.update(birth.individual.genome.hash for birth in self.window)
@@ -236,6 +238,13 @@ class Nursery:
             config = self.strategy.config
             kept = self.state.archive or Archive(config.descriptors, config.bins)
             self.archive = kept.copy()
+
+    def scores(self) -> np.ndarray:
+        """The members' fitness as an array, made once while the population is full (a
+        replacement writes its slot), not once a birth."""
+        if self._scores is None or len(self._scores) != len(self.fitness):
+            self._scores = np.array(self.fitness, dtype=np.float64)
+        return self._scores
 
     @property
     def row_done(self) -> bool:
@@ -284,6 +293,8 @@ class Nursery:
         if fitness > lowest:
             self.population[slot] = birth.individual
             self.fitness[slot] = fitness
+            if self._scores is not None and len(self._scores) == len(self.fitness):
+                self._scores[slot] = fitness
             self.births[slot] = birth.number
             heapq.heapreplace(self.worst, (fitness, birth.number, slot))
 

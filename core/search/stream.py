@@ -203,10 +203,18 @@ def _by_row(births: list[Birth], population: int) -> dict[int, dict[int, int]]:
 
 
 def _tell_known(row: _Row) -> None:
-    """Tell every birth, oldest first, whose fitness is known; each breeds the next."""
+    """Tell every birth, oldest first, whose fitness is known; each breeds the next. The new
+    births are kept together (one call of the hooks, not one a birth), but before the oldest
+    in flight is one of them (a window of 1): the hooks may know its fitness, after a takeover."""
     nursery, cache = row.nursery, row.cache
+    bred: list[Birth] = []
     while not nursery.row_done and nursery.window:
+        if bred and nursery.window[0].number >= bred[0].number:
+            row.keep(bred)
+            bred = []
         genome_hash = nursery.window[0].individual.genome.hash
         if genome_hash not in cache:
-            return
-        row.keep([nursery.tell(cache[genome_hash], row.measures.get(genome_hash, {}), cache)])
+            break
+        bred.append(nursery.tell(cache[genome_hash], row.measures.get(genome_hash, {}), cache))
+    if bred:
+        row.keep(bred)

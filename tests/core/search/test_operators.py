@@ -123,6 +123,28 @@ def test_tournament_of_size_one_is_uniform_and_large_tournaments_pick_the_best()
     assert np.mean(operators.tournament(fitness, 500, 8, rng) >= 7) > 0.9
 
 
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(1, 8),
+    st.integers(1, 8),
+    st.lists(
+        st.sampled_from([0.0, 1.0, 2.0, math.nan, -math.inf, math.inf]), min_size=1, max_size=9
+    ),
+)
+def test_few_entrants_pick_the_winners_numpy_picks_by_the_same_draws(
+    seed: int, n: int, size: int, values: list[float]
+) -> None:
+    """The Python path for a few entrants (steady-state's births) against numpy's argmax: the
+    same winners (NaN lowest, ties to the first drawn) and the generator left the same."""
+    fitness = np.array(values)
+    fast, slow = np.random.default_rng(seed), np.random.default_rng(seed)
+    winners = operators.tournament(fitness, n, size, fast)
+    entrants = slow.integers(0, len(fitness), size=(n, size))
+    key = np.where(np.isnan(fitness[entrants]), -np.inf, fitness[entrants])
+    assert winners.tolist() == entrants[np.arange(n), np.argmax(key, axis=1)].tolist()
+    assert fast.random() == slow.random()
+
+
 @pytest.mark.parametrize("seed", range(5))
 def test_diversity_is_the_mean_pairwise_normalised_hamming_distance(seed: int) -> None:
     """Counted from value counts in one pass; checked here pair by pair, as it is defined."""
