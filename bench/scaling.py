@@ -1,6 +1,6 @@
 """Past one machine, by simulation (issue 37): `nice -n 5 python bench/scaling.py [--workers 32]
 [--population 200] [--generations 30] [--windows 128,200] [--algorithms steady-state,ga]
-[--database sqlite|postgres] [--robot-ms MS1,MS2,MS3,MS4] [--profile]`.
+[--database sqlite|postgres] [--robot-ms MS1,MS2,MS3,MS4] [--profile] [--tree PATH]`.
 
 One API process (this one: the service's `Coordinator` on a fresh SQLite database, or a scratch
 PostgreSQL one, its evaluator the service's `RQEvaluator`) drives a `paper-voxel` run (4x4x4,
@@ -27,6 +27,11 @@ the rest; Redis commands (INFO commandstats) and read events (INFO stats `total_
 about one per round trip, a pipeline counting once) per simulated robot; redis-server's and the
 workers' CPU per job; and the load of other processes meanwhile (`OtherLoad`). `--profile` runs
 each once more under yappi (CPU clock, every thread) and prints where this process's time goes.
+
+`--tree PATH [--repeats N]` compares the API side of an earlier checkout (a `git worktree`):
+each run goes to a fresh interpreter of the tree and of this checkout in turn (A B, N times,
+after a warm-up run in each), on the same redis-server and workers, and prints this
+checkout's API CPU per birth against the tree's (the medians) for each run.
 """
 
 from __future__ import annotations
@@ -34,16 +39,19 @@ from __future__ import annotations
 import argparse
 import contextlib
 import gc
+import itertools
+import json
 import os
 import platform
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
 import threading
 import time
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -52,7 +60,8 @@ import scaling_job
 from benchlib import cpu_model, redis_version
 from rq import Worker
 from rq_workers import redis_server, stop
-from scaling_meter import Meter, median_gap, mid_busy, profile
+from scaling_meter import HEADER, Figures, Meter, median_gap, mid_busy, profile
+from staged import own_strategies, stage
 
 from softevo.api import store
 from softevo.api.coordinator import Coordinator
@@ -160,49 +169,6 @@ def workers(url: str, count: int, workdir: Path, per_voxel: dict[int, float]) ->
             stop(process, grace=5)
 
 
-@dataclass
-class Figures:
-    label: str
-    births: int
-    robots: int
-    jobs: int
-    wall: float
-    busy: float  # the stand-in's simulation seconds
-    mid: float  # the busy fraction in the middle 80 % of the wall
-    empty: float  # the share of the middle 80 % with no job waiting on the queue
-    gap: float  # the median time (s) between a worker's jobs
-    cpu: float  # this process
-    cpu_driver: float
-    cpu_batches: float
-    commands: int
-    reads: int
-    redis_cpu: float
-    workers_cpu: float
-    other: float  # cores used by processes outside this bench
-    best: float | None
-
-    def line(self, workers: int) -> str:
-        per_birth = 1e3 / self.births
-        return (
-            f"{self.label:<22}{self.births:>7}{self.robots:>7}{self.robots / self.jobs:>7.2f}"
-            f"{self.wall:>8.1f}{self.busy / (workers * self.wall):>7.3f}{self.mid:>6.3f}"
-            f"{self.empty:>6.2f}{1e3 * self.gap:>6.0f}"
-            f"{self.cpu * per_birth:>9.3f}{self.cpu_driver * per_birth:>8.3f}"
-            f"{self.cpu_batches * per_birth:>8.3f}{self.commands / self.robots:>8.1f}"
-            f"{self.reads / self.robots:>7.1f}{1e3 * self.redis_cpu / self.jobs:>7.2f}"
-            f"{1e3 * self.workers_cpu / self.jobs:>8.2f}{self.other:>6.2f}"
-            f"{'' if self.best is None else f'{self.best:>6.3f}'}"
-        )
-
-
-HEADER = (
-    f"{'run':<22}{'births':>7}{'robots':>7}{'r/job':>7}{'wall s':>8}{'busy':>7}{'mid':>6}"
-    f"{'q=0':>6}{'gap':>6}"
-    f"{'CPU/b ms':>9}{'driver':>8}{'batches':>8}{'cmd/r':>8}{'rd/r':>7}{'redis':>7}"
-    f"{'workers':>8}{'other':>6}{'best':>6}"
-)
-
-
 def request(args: argparse.Namespace, algorithm: str, window: int | None) -> dict[str, Any]:
     extra = {} if window is None else {"options": {"window": window}}
     return {
@@ -279,7 +245,7 @@ def drive(
     )
 
 
-def main() -> None:
+def arguments() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--workers", type=int, default=32, help="RQ SimpleWorkers (32)")
     parser.add_argument("--population", type=int, default=200, help="population (200)")
@@ -290,20 +256,13 @@ def main() -> None:
     parser.add_argument("--database", choices=["sqlite", "postgres"], default="sqlite")
     parser.add_argument("--robot-ms", help="ms of the sample's mean robot in a call of 1,2,3,4")
     parser.add_argument("--profile", action="store_true", help="each run again under yappi")
-    args = parser.parse_args()
-    if shutil.which("redis-server") is None:
-        sys.exit("bench/scaling.py needs the redis-server binary")
-    if args.robot_ms:
-        per_voxel, mean = measure_model(repeats=1, robots=1)  # only the sample's mean voxels
-        ms = [float(v) for v in args.robot_ms.split(",")]
-        per_voxel = {width: ms[i] / 1e3 / mean for i, width in enumerate(WIDTHS)}
-    else:
-        per_voxel, mean = measure_model()
-    runs = [
-        (f"steady-state W={w}", request(args, "steady-state", int(w)))
-        for w in args.windows.split(",")
-        if "steady-state" in args.algorithms.split(",")
-    ] + [("ga", request(args, "ga", None))] * ("ga" in args.algorithms.split(","))
+    parser.add_argument("--tree", help="also run an earlier checkout's API side, alternated")
+    parser.add_argument("--repeats", type=int, default=1, help="with --tree: A B pairs (1)")
+    parser.add_argument("--once", help=argparse.SUPPRESS)  # a --tree child's run, as JSON
+    return parser.parse_args()
+
+
+def print_header(args: argparse.Namespace, per_voxel: dict[int, float], mean: float) -> None:
     load = os.getloadavg()
     print(
         f"# {cpu_model()}, {os.cpu_count()} cores, load {load[0]:.2f} {load[1]:.2f} "
@@ -322,24 +281,106 @@ def main() -> None:
     print("# CPU/b: this process's CPU per birth (ms), driver and batches: its threads'; cmd/r,")
     print("# rd/r: Redis commands and read events per robot; redis, workers: their CPU per job")
     print("# (ms); other: cores used meanwhile by processes outside this bench")
-    print(HEADER, flush=True)
+    print(("tree  " if args.tree else "") + HEADER, flush=True)
+
+
+def run_child(args: argparse.Namespace) -> None:
+    """`--once`: a warm-up run, then the measured one, in this fresh interpreter (of this
+    checkout, or of the staged tree first on PYTHONPATH); the figures as JSON."""
+    spec = json.loads(args.once)
+    if spec["tree"]:
+        own_strategies(Path(spec["tree"]))
+        if not str(Path(store.__file__).resolve()).startswith(spec["tree"]):
+            raise SystemExit(f"imported {store.__file__}, not the tree's")
+    folder, figures = Path(spec["folder"]), None
+    for part, generations in (("warm", 2), ("run", spec["request"]["generations"])):
+        run_request = {**spec["request"], "generations": generations}
+        with database(args.database, folder, f"{spec['name']}{part}") as db:
+            figures = drive(db, spec["url"], run_request, args.batch_size, spec["pids"], "")
+    print(json.dumps(asdict(figures)))
+
+
+def in_child(args: argparse.Namespace, spec: dict[str, Any], staged: str | None) -> Figures:
+    """One run of `--tree`'s alternation, in a fresh interpreter (neither tree's imports help
+    the other); `staged` is the earlier tree, or None for this checkout."""
+    env = dict(os.environ)
+    if staged is not None:
+        env["PYTHONPATH"] = os.pathsep.join([staged, str(BENCH)])
+    command = [sys.executable, __file__, "--once", json.dumps({**spec, "tree": staged})]
+    command += ["--database", args.database, "--batch-size", str(args.batch_size)]
+    out = subprocess.run(command, env=env, capture_output=True, text=True, check=False)
+    if out.returncode != 0:
+        raise SystemExit(f"{spec['name']} failed:\n{out.stderr[-3000:]}")
+    return Figures(**json.loads(out.stdout.strip().splitlines()[-1]))
+
+
+def alternate(
+    args: argparse.Namespace, runs: list, url: str, pids: list[int], folder: Path
+) -> None:
+    """Each run of the earlier tree and of this checkout in turn, `repeats` times; then this
+    checkout's CPU per birth against the tree's (the medians)."""
+    staged = stage(Path(args.tree))
+    trees = [("tree", str(staged)), ("this", None)]
+    for number, (label, run_request) in enumerate(runs):
+        per_birth: dict[str, list[float]] = {"tree": [], "this": []}
+        for repeat, (name, path) in itertools.product(range(args.repeats), trees):
+            spec = {"url": url, "pids": pids, "folder": str(folder), "request": run_request}
+            got = in_child(args, {**spec, "name": f"{name}{number}r{repeat}"}, path)
+            got.label = label
+            per_birth[name].append(got.cpu / got.births)
+            print(f"{name:<6}" + got.line(args.workers), flush=True)
+        ratio = statistics.median(per_birth["tree"]) / statistics.median(per_birth["this"])
+        print(f"# {label}: this checkout {ratio:.2f}x less API CPU per birth than the tree")
+    shutil.rmtree(staged, ignore_errors=True)
+
+
+def main() -> None:
+    args = arguments()
+    if args.once:
+        run_child(args)
+        return
+    if shutil.which("redis-server") is None:
+        sys.exit("bench/scaling.py needs the redis-server binary")
+    if args.robot_ms:
+        per_voxel, mean = measure_model(repeats=1, robots=1)  # only the sample's mean voxels
+        ms = [float(v) for v in args.robot_ms.split(",")]
+        per_voxel = {width: ms[i] / 1e3 / mean for i, width in enumerate(WIDTHS)}
+    else:
+        per_voxel, mean = measure_model()
+    runs = [
+        (f"steady-state W={w}", request(args, "steady-state", int(w)))
+        for w in args.windows.split(",")
+        if "steady-state" in args.algorithms.split(",")
+    ] + [("ga", request(args, "ga", None))] * ("ga" in args.algorithms.split(","))
+    print_header(args, per_voxel, mean)
     with tempfile.TemporaryDirectory(prefix="softevo-scaling-") as tmp:
         folder = Path(tmp)
         with redis_server(folder) as url, workers(url, args.workers, folder, per_voxel) as procs:
             pids = [process.pid for process in procs]
-
-            def once(label: str, run_request: dict[str, Any], name: str) -> Figures:
-                with database(args.database, folder, name) as db:
-                    return drive(db, url, run_request, args.batch_size, pids, label)
-
-            for label, run_request in runs:  # untimed: imports, first calls, every worker
-                once(label, {**run_request, "generations": 2}, f"warm{len(label)}")
-            for number, (label, run_request) in enumerate(runs):
-                print(once(label, run_request, f"run{number}").line(args.workers), flush=True)
-            for number, (label, run_request) in enumerate(runs * args.profile):
-                profile(lambda: once(label, run_request, f"profile{number}"), label)  # noqa: B023
+            if args.tree:
+                alternate(args, runs, url, pids, folder)
+            else:
+                in_process(args, runs, url, pids, folder)
     load = os.getloadavg()
     print(f"# load after: {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
+
+
+def in_process(
+    args: argparse.Namespace, runs: list, url: str, pids: list[int], folder: Path
+) -> None:
+    """Each run in this process, after an untimed warm-up of each; with --profile, again
+    under yappi."""
+
+    def once(label: str, run_request: dict[str, Any], name: str) -> Figures:
+        with database(args.database, folder, name) as db:
+            return drive(db, url, run_request, args.batch_size, pids, label)
+
+    for label, run_request in runs:  # untimed: imports, first calls, every worker
+        once(label, {**run_request, "generations": 2}, f"warm{len(label)}")
+    for number, (label, run_request) in enumerate(runs):
+        print(once(label, run_request, f"run{number}").line(args.workers), flush=True)
+    for number, (label, run_request) in enumerate(runs * args.profile):
+        profile(lambda: once(label, run_request, f"profile{number}"), label)  # noqa: B023
 
 
 if __name__ == "__main__":

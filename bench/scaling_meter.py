@@ -10,6 +10,7 @@ import math
 import os
 import threading
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -187,3 +188,46 @@ def place(module: str) -> str:
         inside = path.relative_to(BENCH.parent)
         return ("" if inside.parts[0] == "bench" else "softevo/") + str(inside)
     return path.name if path.suffix else module
+
+
+@dataclass
+class Figures:
+    label: str
+    births: int
+    robots: int
+    jobs: int
+    wall: float
+    busy: float  # the stand-in's simulation seconds
+    mid: float  # the busy fraction in the middle 80 % of the wall
+    empty: float  # the share of the middle 80 % with no job waiting on the queue
+    gap: float  # the median time (s) between a worker's jobs
+    cpu: float  # this process
+    cpu_driver: float
+    cpu_batches: float
+    commands: int
+    reads: int
+    redis_cpu: float
+    workers_cpu: float
+    other: float  # cores used by processes outside this bench
+    best: float | None
+
+    def line(self, workers: int) -> str:
+        per_birth = 1e3 / self.births
+        return (
+            f"{self.label:<22}{self.births:>7}{self.robots:>7}{self.robots / self.jobs:>7.2f}"
+            f"{self.wall:>8.1f}{self.busy / (workers * self.wall):>7.3f}{self.mid:>6.3f}"
+            f"{self.empty:>6.2f}{1e3 * self.gap:>6.0f}"
+            f"{self.cpu * per_birth:>9.3f}{self.cpu_driver * per_birth:>8.3f}"
+            f"{self.cpu_batches * per_birth:>8.3f}{self.commands / self.robots:>8.1f}"
+            f"{self.reads / self.robots:>7.1f}{1e3 * self.redis_cpu / self.jobs:>7.2f}"
+            f"{1e3 * self.workers_cpu / self.jobs:>8.2f}{self.other:>6.2f}"
+            f"{'' if self.best is None else f'{self.best:>6.3f}'}"
+        )
+
+
+HEADER = (
+    f"{'run':<22}{'births':>7}{'robots':>7}{'r/job':>7}{'wall s':>8}{'busy':>7}{'mid':>6}"
+    f"{'q=0':>6}{'gap':>6}"
+    f"{'CPU/b ms':>9}{'driver':>8}{'batches':>8}{'cmd/r':>8}{'rd/r':>7}{'redis':>7}"
+    f"{'workers':>8}{'other':>6}{'best':>6}"
+)

@@ -41,6 +41,7 @@ from softevo.core.evaluator import (
     batch_digest,
     refuse_dropped,
 )
+from softevo.worker.outbox import Outbox
 from softevo.worker.queue import (
     JOB_FUNCTION,
     QUEUE,
@@ -75,6 +76,7 @@ class RQEvaluator(Evaluator):
     ) -> None:
         self.connection = connect(redis_url)
         self.queue = Queue(queue, connection=self.connection, serializer=SERIALIZER)
+        self.outbox = Outbox(self.connection, self.queue)  # every thread's jobs, sent together
         self.deadline_factor = deadline_factor
         self.min_deadline = min_deadline
         self.initial_deadline = initial_deadline
@@ -211,11 +213,11 @@ class RQEvaluator(Evaluator):
         expected = self.expected_seconds(files)
         # RQ kills a work horse 60 s after this: the hard limit for a job that runs away
         timeout = 600 if expected is None else max(60, math.ceil(20 * expected))
-        # on a pipeline of ours, RQ sends the job and its queue's name in one round trip, not two;
         # the description is said, or RQ would build it from the repr of every robot file (about
-        # a tenth of the enqueue's CPU), and rq-dashboard shows the batch's key instead
-        with self.connection.pipeline() as pipe:
-            self.queue.enqueue_call(
+        # a tenth of the enqueue's CPU), and rq-dashboard shows the batch's key instead; the
+        # outbox sends it with the other threads' jobs, one round trip for all
+        self.outbox.send(
+            Queue.prepare_data(
                 self.job_function,
                 args=(key, files, *extra),
                 job_id=job_id,
@@ -224,9 +226,8 @@ class RQEvaluator(Evaluator):
                 meta={"engine": self.engine},
                 result_ttl=600,
                 failure_ttl=3600,
-                pipeline=pipe,
             )
-            pipe.execute()
+        )
         return job_id
 
     def collect(
