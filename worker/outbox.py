@@ -1,12 +1,12 @@
 """Jobs from every batch thread sent to Redis together (issue 52).
 
 Each batch thread used to enqueue its own job: RQ's `Job` built, its hash packed, one round trip
-a job. Here a thread that finds no send under way takes every job gathered so far (its own and
-any other thread's) and sends them with RQ's `enqueue_many` in one pipeline: one round trip for
-them all, and the queue's set written once. The threads whose jobs it took wait for it; a thread
-whose job came in while it sent becomes the next sender. Nothing waits for company: a job alone
-goes at once, so the outbox adds no latency, only fewer round trips when jobs come together (a
-generation's batches, or several results landing at once).
+a job. Here a thread that finds no send under way becomes the sender: it sends the jobs
+gathered (its own and any other thread's), up to `MOST` at a time, with RQ's `enqueue_many` in
+one pipeline, one round trip each, until none is left. The threads whose jobs it sends wait for
+theirs, each woken alone. Nothing waits for company: a job alone goes at once, so the outbox
+adds no latency, only fewer round trips when jobs come together (a generation's batches, or
+several results landing at once).
 
 A send that fails (Redis away) fails for every job it held, and each thread handles it as its
 own enqueue's failure: it waits and enqueues again.
@@ -15,17 +15,22 @@ own enqueue's failure: it waits and enqueues again.
 from __future__ import annotations
 
 import threading
-from dataclasses import dataclass
+from collections import deque
+from dataclasses import dataclass, field
 
 from redis import Redis
 from rq import Queue
 from rq.queue import EnqueueData
 
+#: Most jobs in one pipeline: the first of them reaches a worker only once the pipeline is
+#: built and sent, so a generation's 50 batches go as several sends, not one long one.
+MOST = 8
+
 
 @dataclass
 class _Letter:
     data: EnqueueData
-    sent: bool = False
+    sent: threading.Event = field(default_factory=threading.Event)
     error: BaseException | None = None
 
 
@@ -35,26 +40,30 @@ class Outbox:
     def __init__(self, connection: Redis, queue: Queue) -> None:
         self.connection = connection
         self.queue = queue
-        self._changed = threading.Condition()
-        self._pending: list[_Letter] = []
+        self._lock = threading.Lock()
+        self._pending: deque[_Letter] = deque()
         self._busy = False  # a thread is sending
         self.sends = 0  # round trips made, and jobs sent by them (`bench/scaling.py` reads both)
         self.jobs = 0
 
     def send(self, data: EnqueueData) -> None:
         letter = _Letter(data)
-        batch: list[_Letter] = []
-        with self._changed:
+        with self._lock:
             self._pending.append(letter)
-            while self._busy and not letter.sent:
-                self._changed.wait()
-            if not letter.sent:  # no send under way: this thread sends what has gathered
-                self._busy = True
-                batch, self._pending = self._pending, []
-        if batch:
-            self._send(batch)
+            lead, self._busy = not self._busy, True
+        if lead:  # no send under way: this thread sends until none is left (its own first)
+            while batch := self._take():
+                self._send(batch)
+        letter.sent.wait()  # set by whichever thread sent it (at once, if this one did)
         if letter.error is not None:
             raise letter.error
+
+    def _take(self) -> list[_Letter]:
+        """The next jobs to send, oldest first; none left: the send is over."""
+        with self._lock:
+            batch = [self._pending.popleft() for _ in range(min(MOST, len(self._pending)))]
+            self._busy = bool(batch)
+        return batch
 
     def _send(self, batch: list[_Letter]) -> None:
         error: BaseException | None = None
@@ -66,10 +75,8 @@ class Outbox:
                 pipe.execute()
         except BaseException as raised:  # every thread of the batch gets it
             error = raised
-        with self._changed:
-            for letter in batch:
-                letter.sent, letter.error = True, error
-            self.sends += 1
-            self.jobs += len(batch)
-            self._busy = False
-            self._changed.notify_all()
+        self.sends += 1  # the sender alone writes these
+        self.jobs += len(batch)
+        for letter in batch:
+            letter.error = error
+            letter.sent.set()

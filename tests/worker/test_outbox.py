@@ -91,3 +91,11 @@ def test_a_failed_send_fails_every_job_it_held_and_the_next_send_goes(redis_serv
         connection.close()
     finally:
         evaluator.close()
+
+
+def test_redis_py_packs_and_parses_in_c() -> None:
+    """hiredis (the `redis[hiredis]` extra, in the locks) is what redis-py packs commands and
+    parses replies with: about a fifth of an enqueue's CPU (BENCHMARKS.md, issue 52)."""
+    from redis.utils import HIREDIS_AVAILABLE
+
+    assert HIREDIS_AVAILABLE
