@@ -31,7 +31,8 @@ each once more under yappi (CPU clock, every thread) and prints where this proce
 `--tree PATH [--repeats N]` compares the API side of an earlier checkout (a `git worktree`):
 each run goes to a fresh interpreter of the tree and of this checkout in turn (A B, N times,
 after a warm-up run in each), on the same redis-server and workers, and prints this
-checkout's API CPU per birth against the tree's (the medians) for each run.
+checkout's API CPU per birth against the tree's (the medians) for each run. A tree whose
+pyproject does not ask for hiredis runs without it, as its own locks would have installed it.
 """
 
 from __future__ import annotations
@@ -304,10 +305,15 @@ def in_child(args: argparse.Namespace, spec: dict[str, Any], staged: str | None)
     """One run of `--tree`'s alternation, in a fresh interpreter (neither tree's imports help
     the other); `staged` is the earlier tree, or None for this checkout."""
     env = dict(os.environ)
+    prelude = ""
     if staged is not None:
         env["PYTHONPATH"] = os.pathsep.join([staged, str(BENCH)])
-    command = [sys.executable, __file__, "--once", json.dumps({**spec, "tree": staged})]
-    command += ["--database", args.database, "--batch-size", str(args.batch_size)]
+        if "hiredis" not in (Path(staged) / "pyproject.toml").read_text():
+            prelude = "sys.modules['hiredis'] = None; "  # as its locks installed it: without
+    options = ["--once", json.dumps({**spec, "tree": staged}), "--database", args.database]
+    options += ["--batch-size", str(args.batch_size)]
+    script = f"import runpy, sys; {prelude}sys.argv = {[__file__, *options]!r}; "
+    command = [sys.executable, "-c", script + f"runpy.run_path({__file__!r}, run_name='__main__')"]
     out = subprocess.run(command, env=env, capture_output=True, text=True, check=False)
     if out.returncode != 0:
         raise SystemExit(f"{spec['name']} failed:\n{out.stderr[-3000:]}")
