@@ -9,7 +9,9 @@ nothing (the evaluation-time bias of asynchronous EAs, Scott & De Jong 2015, can
 
 Parents: two tournaments of `tournament_size` among the population (or, with
 `parents: "archive"`, two elites drawn uniformly: a steady-state MAP-Elites), crossed and mutated
-as the GA does; with probability `immigrants` a birth is a random genome instead. Replacement:
+as the GA does (or, with options `variation: "explore"`, by exploring variation: every gene
+mutated with probability `mutated_genes` / n, and a child that repeats a member or a birth in
+flight re-drawn); with probability `immigrants` a birth is a random genome instead. Replacement:
 a told birth joins a population not yet full; after that it replaces the worst member if it is
 strictly better (the oldest of equally bad members goes first), so the best never falls and a
 failed robot never enters. Every P told births make one curve row ("generation").
@@ -27,14 +29,14 @@ from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, ClassVar, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import Field
 
 from softevo.core.search import operators
 from softevo.core.search.archive import Archive
 from softevo.core.search.state import GAState, Individual
 from softevo.core.search.stats import GenerationStats
 from softevo.core.search.strategy import Strategy
-from softevo.core.search.variation import mate
+from softevo.core.search.variation import VariationOptions, explore_child, mate
 
 if TYPE_CHECKING:
     from softevo.core.search.settings import SearchSettings
@@ -48,10 +50,9 @@ MAX_WINDOW = 8
 _BIRTHS = 0x5EED
 
 
-class SteadyStateOptions(BaseModel):
-    """The in-flight window and where parents come from."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
+class SteadyStateOptions(VariationOptions):
+    """The in-flight window, where parents come from, and how a child is made (the paper's
+    operators unless `variation` is explore)."""
 
     window: int | None = Field(
         None,
@@ -196,14 +197,27 @@ class SteadyState(Strategy):
             if elites:
                 picks = [elites[int(i)] for i in rng.integers(0, len(elites), size=2)]
                 pair = (Individual(picks[0].genome, "elite"), Individual(picks[1].genome, "elite"))
-                child = mate(config, self.encoding, pair, (0, 1), rng, children=1)[0]
+                child = self.child(nursery, pair, rng)
                 born = [elite.generation * config.population + elite.index for elite in picks]
                 return replace(child, parents=tuple(born[i] for i in child.parents))
         chosen = operators.tournament(nursery.scores(), 2, config.tournament_size, rng).tolist()
         pair = (nursery.population[chosen[0]], nursery.population[chosen[1]])
-        child = mate(config, self.encoding, pair, (0, 1), rng, children=1)[0]
+        child = self.child(nursery, pair, rng)
         parents = tuple(nursery.births[chosen[i]] for i in child.parents)
         return Individual(child.genome, child.operator, parents)
+
+    def child(
+        self, nursery: Nursery, pair: tuple[Individual, Individual], rng: np.random.Generator
+    ) -> Individual:
+        """One child of `pair` (parents named 0 and 1): the paper's operators, or exploring
+        ones, re-drawn while it repeats a member or a birth in flight (what the nursery holds
+        is the same on any worker count; results that landed early are not asked)."""
+        config, encoding = self.config, self.encoding
+        if self.options.variation != "explore":
+            return mate(config, encoding, pair, (0, 1), rng, children=1)[0]
+        seen = {member.genome.hash for member in nursery.population}
+        seen.update(nursery.hashes)
+        return explore_child(config, encoding, pair, self.options.mutated_genes, seen, rng)
 
 
 @dataclass

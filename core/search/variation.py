@@ -30,8 +30,8 @@ if TYPE_CHECKING:
 
 
 class VariationOptions(BaseModel):
-    """How children are made: the options the GA, NSGA-II and AFPO share (MAP-Elites has its
-    own variation options; steady-state breeds with the paper's operators)."""
+    """How children are made: the options the GA, NSGA-II, AFPO and steady-state share
+    (MAP-Elites has its own variation options)."""
 
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 
@@ -218,6 +218,21 @@ def explore_children(
     return children[:count]
 
 
+def explore_child(
+    config: SearchSettings,
+    encoding: Encoding,
+    pair: tuple[Individual, Individual],
+    mutated_genes: float,
+    seen: set[str],
+    rng: np.random.Generator,
+) -> Individual:
+    """One child of `pair` (named 0 and 1) by exploring variation, re-drawn while its genome
+    is in `seen` (steady-state's birth: one child, its sibling's mutation never drawn)."""
+    rate = gene_rate(encoding, mutated_genes)
+    breed = partial(_pair, config, encoding, pair, (0, 1), rate, rng, 1)
+    return unseen(breed, seen)[0]
+
+
 def _pair(
     config: SearchSettings,
     encoding: Encoding,
@@ -225,12 +240,13 @@ def _pair(
     indices: tuple[int, int],
     rate: float,
     rng: np.random.Generator,
+    children: int = 2,
 ) -> list[Individual]:
     if encoding.variation is not None:  # its own operators (cppn: NEAT), as `mate` breeds
-        return mate(config, encoding, pair, indices, rng)
+        return mate(config, encoding, pair, indices, rng)[:children]
     operator, *genes = _crossed(config, encoding, pair, rng)
     bred: list[Individual] = []
-    for k, (discrete, real) in enumerate(genes):
+    for k, (discrete, real) in enumerate(genes[:children]):
         discrete, real = _mutated(config, encoding, discrete, real, rate, rng)
         parents = indices if operator == "crossover" else (indices[k],)
         bred.append(Individual(encoding.genome(discrete, real), operator + "+mutation", parents))

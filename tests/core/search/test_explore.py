@@ -73,6 +73,32 @@ def test_explore_keeps_more_diversity_than_the_paper_operators(algorithm: str) -
     assert sum(new) >= sum(stats.evaluations for stats in paper.state.history)
 
 
+def test_steady_state_explores_births_that_repeat_no_member_and_keeps_its_curve() -> None:
+    """Steady-state with options variation explore: more genomes simulated than the paper's
+    operators give (few children repeat a member or a birth in flight), the same curve for the
+    same seed, and the paper's arithmetic still the default."""
+
+    def curve(options: dict) -> list[dict]:
+        request = {
+            "algorithm": "steady-state",
+            "preset": "quick",
+            "shape": [2, 2, 2],
+            "population": 8,
+            "generations": 6,
+            "sim": {"duration": 0.5, "settle_time": 0.2},
+            "options": options,
+        }
+        evolution = Evolution.start(resolve(request))
+        evolution.run(SerialEvaluator())
+        return evolution.curve()
+
+    paper, explore = curve({}), curve({"variation": "explore"})
+    assert curve({"variation": "paper"}) == paper
+    assert curve({"variation": "explore"}) == explore != paper
+    simulated = [sum(row["evaluations"] for row in rows[1:]) for rows in (paper, explore)]
+    assert simulated[1] > simulated[0]  # the first row is random in both
+
+
 def test_new_runs_explore_and_stored_configs_keep_their_variation() -> None:
     new = resolve({"preset": "quick", "algorithm": "nsga2"}, new=True)
     assert new.options == {"variation": "explore"}
