@@ -84,7 +84,7 @@ def write_results(out: Path, evolution: Evolution) -> None:
             writer.writerow(
                 [
                     "" if v is None or (isinstance(v, float) and math.isnan(v)) else v
-                    for v in (row[c] for c in columns)
+                    for v in (row.get(c) for c in columns)  # a resumed run's older rows
                 ]
             )
     os.replace(temporary, out / "curve.csv")
