@@ -5,7 +5,8 @@ or is interrupted, so an interrupted run still has its partial results:
 
     run.db            the run as the service stores one (SQLite): what `--resume` goes on from
     config.json       the resolved run configuration (preset merged with overrides)
-    curve.csv         one row per generation (the learning curve)
+    curve.csv         one row per generation (the learning curve; a run with objectives adds
+                      hypervolume, front_size and normalised_hypervolume, 0-1)
     curve.json        {"run": config, "generations": [rows]}, the same as `softevo run --json`
     best_robot.json   the fastest robot so far, a softevo.robot/1 file
     state.json        the genetic algorithm's state (JSON), for inspection
