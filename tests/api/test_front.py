@@ -98,7 +98,7 @@ def test_a_run_stored_before_the_normalised_hypervolume_is_served(client: TestCl
     csv = client.get(f"/runs/{run_id}/curve", params={"format": "csv"}).text
     assert csv.splitlines()[1].endswith(",")  # the column, empty
     front = client.get(f"/runs/{run_id}/front").json()
-    assert [item["ideal"] for item in front["objectives"]] == [0.5, 0.0]  # the defaults
+    assert [item["ideal"] for item in front["objectives"]] == [1.0, 0.0]  # the defaults
 
 
 def test_objectives_that_read_the_actuators_work_are_budgeted_as_efficiency() -> None:

@@ -89,7 +89,7 @@ def readable(browser: Any, service: httpx.Client, run_id: int) -> None:
     scaled = browser.evaluate("window.softevo.charts.hypervolume.data[2]")  # issue 51
     assert scaled == [r["normalised_hypervolume"] for r in curve] and 0 < scaled[-1] <= 1
     title = browser.text_content("#hypervolume h3")
-    assert "normalised (0-1, each objective scaled from reference to ideal: speed 0 to 0.5" in title
+    assert "normalised (0-1, each objective scaled from reference to ideal: speed 0 to 1" in title
     series = "[...document.querySelectorAll('#hypervolume .u-series')].map(s => s.textContent)"
     assert browser.evaluate(series)[-1] == f"normalised (0-1){scaled[-1]:.3f}"
     legend = "[...document.querySelectorAll('#population .u-series')].map(s => s.textContent)"

@@ -27,12 +27,12 @@ def test_names_and_objects_are_one_setting_stored_with_their_reference() -> None
     assert short == long
     stored = short.to_json()["objectives"]
     assert stored == [
-        {"measure": "speed", "goal": "max", "reference": 0.0, "ideal": 0.5},
+        {"measure": "speed", "goal": "max", "reference": 0.0, "ideal": 1.0},
         {"measure": "cost_of_transport", "goal": "min", "reference": 100_000.0, "ideal": 0.0},
     ]
     assert resolve(short.to_json()) == short  # what is stored reads back the same
     assert reference_point(short.objectives).tolist() == [0.0, -100_000.0]
-    assert ideal_point(short.objectives).tolist() == [0.5, -0.0]
+    assert ideal_point(short.objectives).tolist() == [1.0, -0.0]
     assert needs_energy(short.objectives) and not needs_energy(resolve({}).objectives)
     own = resolve({"objectives": [{"measure": "heading", "reference": -180}]})
     assert own.objectives[0].reference == -180.0
@@ -47,8 +47,8 @@ def test_an_ideal_is_given_or_filled_in_and_a_config_stored_before_ideals_loads(
     without = [{k: v for k, v in item.items() if k != "ideal"} for item in stored["objectives"]]
     old = {**stored, "objectives": without}
     assert resolve(old).to_json() == stored  # the defaults fill the ideal in
-    past = resolve({**old, "objectives": [{"measure": "speed", "reference": 0.7}]})
-    assert past.objectives[0].ideal == 0.7 + 0.5  # a reference past the default ideal loads
+    past = resolve({**old, "objectives": [{"measure": "speed", "reference": 1.5}]})
+    assert past.objectives[0].ideal == 1.5 + 1.0  # a reference past the default ideal loads
     counted = resolve({"objectives": [{"measure": "masses", "goal": "min", "reference": -2}]})
     assert counted.objectives[0].ideal == -3.0  # one unit past it: no default range
 
