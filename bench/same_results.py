@@ -81,6 +81,17 @@ CASES: dict[str, dict[str, Any]] = {
         **SHORT,
     },
     "afpo-stored": {"preset": "quick", "algorithm": "afpo", "_stored": True, **SHORT},
+    # a config stored before objectives had an ideal (issue 51): it loads with the defaults
+    "nsga2-no-ideal": {
+        "preset": "quick",
+        "algorithm": "nsga2",
+        "objectives": [
+            {"measure": "speed", "goal": "max", "reference": 0.0},
+            {"measure": "energy", "goal": "min", "reference": 1_000_000.0},
+        ],
+        "_stored": True,
+        **SHORT,
+    },
     "steady-state": {"preset": "quick", "algorithm": "steady-state", **SHORT},
     "steady-archive": {
         "preset": "quick",
@@ -93,7 +104,16 @@ CASES: dict[str, dict[str, Any]] = {
     "cppn": {"preset": "quick", "encoding": "cppn", "shape": [4, 4, 4], **SHORT},
 }
 
-NEWER = {"nsga2", "afpo", "nsga2-stored", "afpo-stored", "steady-state", "steady-archive", "cppn"}
+NEWER = {
+    "nsga2",
+    "afpo",
+    "nsga2-stored",
+    "afpo-stored",
+    "nsga2-no-ideal",
+    "steady-state",
+    "steady-archive",
+    "cppn",
+}
 
 ONE = """
 import hashlib, json, sys
