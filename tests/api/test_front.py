@@ -105,3 +105,10 @@ def test_objectives_that_read_the_actuators_work_are_budgeted_as_efficiency() ->
     plain, energy = resolve({}), resolve({"objectives": ["speed", "-cost_of_transport"]})
     assert cost_factor(energy) == cost_factor(resolve({"objective": "efficiency"})) > 1.0
     assert cost_factor(resolve({"objectives": ["speed", "distance"]})) == cost_factor(plain)
+
+
+def test_openapi_names_the_normalised_hypervolume_and_the_ideal(client: TestClient) -> None:
+    schemas = client.get("/openapi.json").json()["components"]["schemas"]
+    column = schemas["CurveRow"]["properties"]["normalised_hypervolume"]
+    assert "from its reference (0) to its ideal (1)" in column["description"]
+    assert "ideal" in schemas["ObjectiveIn"]["properties"]

@@ -161,7 +161,8 @@ def _csv(rows: list[dict[str, Any]]) -> str:
 
 @router.get(
     "/{run_id}/curve",
-    responses={**NOT_FOUND, 200: {"content": {"text/csv": {}}}},
+    # the model documents the JSON rows (their Pareto columns included) in the OpenAPI schema
+    responses={**NOT_FOUND, 200: {"model": Curve, "content": {"text/csv": {}}}},
     response_model_exclude_unset=True,  # coverage, qd_score, the Pareto columns: some runs
 )
 def get_curve(
