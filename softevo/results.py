@@ -21,7 +21,8 @@ or is interrupted, so an interrupted run still has its partial results:
                       evaluated (population.csv's columns), and every robot as a dot with the
                       front drawn over them
     hypervolume.png   a run with objectives: the hypervolume of the front so far against the
-                      simulations run (curve.csv's hypervolume and evaluations)
+                      simulations run (curve.csv's hypervolume and evaluations), and dashed
+                      on a right axis its normalised_hypervolume (0-1)
 
 A folder written before run.db (state.json and cache.json were what `--resume` went on from) is
 read here (`read_resumable`) to be imported into a store.
