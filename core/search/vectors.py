@@ -89,7 +89,7 @@ def _spec(item: Any, position: int) -> ObjectiveSpec:
     sign = 1.0 if goal == "max" else -1.0
     ideal = _bound(item, "ideal", None, where)
     if ideal is None:
-        ideal = _default_ideal(measure, sign, reference)
+        ideal = _default_ideal(measure, sign, reference, where)
     elif sign * (ideal - reference) <= 0:
         better = "above" if goal == "max" else "below"
         raise ValueError(
@@ -111,7 +111,7 @@ def _bound(item: dict[str, Any], key: str, default: float | None, where: str) ->
     return float(value)
 
 
-def _default_ideal(measure: str, sign: float, reference: float) -> float:
+def _default_ideal(measure: str, sign: float, reference: float, where: str) -> float:
     """The measure's ideal (`MEASURES`), or, for a reference given at or past it (a config may
     have been stored before ideals existed), one default range (or 1 unit) past the reference:
     every config that loaded before still loads."""
@@ -119,7 +119,12 @@ def _default_ideal(measure: str, sign: float, reference: float) -> float:
     if sign * (ideal - reference) > 0:
         return ideal
     span = abs(ideal - default_reference) if default_reference is not None else 1.0
-    return reference + sign * span
+    shifted = reference + sign * span
+    if shifted == reference:  # a reference so large that the span is below its precision
+        shifted = math.nextafter(reference, sign * math.inf)
+    if not math.isfinite(shifted):
+        raise ValueError(f"{where}: no ideal is better than reference {reference!r}, give `ideal`")
+    return shifted
 
 
 def needs_energy(specs: Sequence[ObjectiveSpec]) -> bool:

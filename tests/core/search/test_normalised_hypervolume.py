@@ -5,10 +5,13 @@ worked out by hand."""
 from __future__ import annotations
 
 import math
+import warnings
 
+import numpy as np
 import pytest
 
 from softevo.core.robots.encoding_registry import make_encoding
+from softevo.core.search import pareto
 from softevo.core.search.algorithm import GAConfig, make_strategy
 from softevo.core.search.stats import GenerationStats, curve_columns
 
@@ -79,3 +82,14 @@ def test_the_column_is_a_pareto_column_and_an_old_row_reads_without_it() -> None
     assert stats.normalised_hypervolume is None
     assert "normalised_hypervolume" not in stats.to_json()
     assert told(RECORDS).to_json()["normalised_hypervolume"] > 0
+
+
+def test_bounds_a_hair_apart_neither_overflow_nor_change_the_volume() -> None:
+    values = np.array([[1.0, -1.0], [-1e300, 0.5], [0.5, math.nan]])
+    ideal, nadir = np.array([5e-324, 1.0]), np.array([0.0, -2.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no overflow warning either
+        scaled = pareto.normalised_hypervolume(values, ideal, nadir)
+    # the first row clipped to the ideal in speed, (-1 + 2) / 3 in cost; the second far past
+    # the reference in speed counts for nothing, as the third (failed) does
+    assert scaled == pytest.approx((1.1 * (1 / 3 + 0.1)) / 1.21, rel=1e-12)

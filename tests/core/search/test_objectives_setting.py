@@ -51,6 +51,10 @@ def test_an_ideal_is_given_or_filled_in_and_a_config_stored_before_ideals_loads(
     assert past.objectives[0].ideal == 1.5 + 1.0  # a reference past the default ideal loads
     counted = resolve({"objectives": [{"measure": "masses", "goal": "min", "reference": -2}]})
     assert counted.objectives[0].ideal == -3.0  # one unit past it: no default range
+    huge = resolve({"objectives": [{"measure": "speed", "reference": 1e300}]}).objectives[0]
+    assert huge.ideal == math.nextafter(1e300, math.inf)  # the next number: still better
+    with pytest.raises(ConfigError, match=r"^objectives: item 0: no ideal is better than"):
+        resolve({"objectives": [{"measure": "speed", "reference": 1.7976931348623157e308}]})
 
 
 def test_a_run_without_objectives_keeps_its_stored_config() -> None:
