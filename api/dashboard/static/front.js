@@ -215,7 +215,7 @@ export function hypervolumeChart(run, curve, parent) {
     scales: { x: { time: false, range: (u, min, max) => [0, Math.max(max, 1)] },
       y: { range: (u, min, max) => [0, Math.max(max * 1.05, 1e-9)] }, normalised: { range: [0, 1] } },
     axes: [{ label: "simulations run (cumulative)" }, { label: `hypervolume (${unitText})`, size: 70 },
-      { scale: "normalised", side: 1, label: "normalised hypervolume (0-1)", size: 60, grid: { show: false } }],
+      { scale: "normalised", side: 1, label: "normalised (0-1)", size: 70, grid: { show: false } }],
     series: [{ label: "simulations", value: atGeneration },
       { label: "hypervolume", stroke: "#2f6fb5", width: 1.5, paths: stepped, value: (u, v) => significant(v) },
       { label: "normalised (0-1)", scale: "normalised", stroke: "#c0392b", width: 1.5, dash: [6, 3],
