@@ -110,6 +110,7 @@ class GenerationRow(Base):
     qd_score: Mapped[float | None] = mapped_column(Float)
     hypervolume: Mapped[float | None] = mapped_column(Float)  # runs with objectives
     front_size: Mapped[int | None] = mapped_column(Integer)
+    normalised_hypervolume: Mapped[float | None] = mapped_column(Float)  # 0-1, from 0007 on
     committed_at: Mapped[datetime] = mapped_column()
 
 

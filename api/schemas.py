@@ -102,7 +102,8 @@ _GA_FIELDS: dict[str, Any] = {name: _optional(info) for name, info in GAConfig.m
 
 
 class ObjectiveIn(BaseModel):
-    """One objective in the object form; the run stores it with its reference filled in."""
+    """One objective in the object form; the run stores it with its reference and ideal filled
+    in."""
 
     model_config = ConfigDict(extra="forbid")
 
@@ -111,6 +112,11 @@ class ObjectiveIn(BaseModel):
     reference: float | None = Field(
         None,
         description="hypervolume reference in the measure's units (default: docs/evolution.md)",
+    )
+    ideal: float | None = Field(
+        None,
+        description="the normalised hypervolume's 1, in the measure's units, better than the "
+        "reference (default: docs/evolution.md)",
     )
 
 
@@ -213,6 +219,12 @@ class CurveRow(BaseModel):
         None, description="with objectives: the hypervolume of the front so far (docs/evolution.md)"
     )
     front_size: int | None = Field(None, description="and its distinct points")
+    normalised_hypervolume: float | None = Field(
+        None,
+        description="and its hypervolume with each objective scaled from its reference (0) to "
+        "its ideal (1), so every objective weighs the same: 1 is a front holding the ideal "
+        "point (docs/evolution.md; absent from generations committed before it existed)",
+    )
 
 
 class Curve(BaseModel):
@@ -361,7 +373,7 @@ class FrontPublic(BaseModel):
     run_id: int
     generations: int = Field(description="committed generations the front has seen")
     objectives: list[dict[str, Any]] = Field(
-        description="the run's objectives: measure, goal, hypervolume reference"
+        description="the run's objectives: measure, goal, hypervolume reference and ideal"
     )
     points: list[FrontPoint] = Field(
         description="the non-dominated set of every individual evaluated so far, each genome "

@@ -4,8 +4,10 @@ A refactor of the search side must keep every run the same to the last digit. Th
 short run of every preset, algorithm, encoding and descriptor set (and of every task) in this
 checkout and in the checkout at `--tree` (an earlier commit in a `git worktree`), each in a
 fresh interpreter, and compares the SHA-256 of their curves (every column, every digit), best
-robots and archives. `--full` also re-runs committed rows of `docs/experiments/results.csv` at
-their full length in this checkout and compares their best speeds with the committed digits.
+robots and archives. A column added since (`ADDED`, issue 51's normalised_hypervolume) is
+hashed apart: compared where both trees have it, and named where only this one does. `--full`
+also re-runs committed rows of `docs/experiments/results.csv` at their full length in this
+checkout and compares their best speeds with the committed digits.
 Prints one line per case and exits 1 on any difference.
 """
 
@@ -79,6 +81,17 @@ CASES: dict[str, dict[str, Any]] = {
         **SHORT,
     },
     "afpo-stored": {"preset": "quick", "algorithm": "afpo", "_stored": True, **SHORT},
+    # a config stored before objectives had an ideal (issue 51): it loads with the defaults
+    "nsga2-no-ideal": {
+        "preset": "quick",
+        "algorithm": "nsga2",
+        "objectives": [
+            {"measure": "speed", "goal": "max", "reference": 0.0},
+            {"measure": "energy", "goal": "min", "reference": 1_000_000.0},
+        ],
+        "_stored": True,
+        **SHORT,
+    },
     "steady-state": {"preset": "quick", "algorithm": "steady-state", **SHORT},
     "steady-archive": {
         "preset": "quick",
@@ -91,7 +104,16 @@ CASES: dict[str, dict[str, Any]] = {
     "cppn": {"preset": "quick", "encoding": "cppn", "shape": [4, 4, 4], **SHORT},
 }
 
-NEWER = {"nsga2", "afpo", "nsga2-stored", "afpo-stored", "steady-state", "steady-archive", "cppn"}
+NEWER = {
+    "nsga2",
+    "afpo",
+    "nsga2-stored",
+    "afpo-stored",
+    "nsga2-no-ideal",
+    "steady-state",
+    "steady-archive",
+    "cppn",
+}
 
 ONE = """
 import hashlib, json, sys
@@ -108,11 +130,15 @@ if config.pop("_stored", False):  # a stored config, as a resumed run reads it
     config = resolve(config)
 result = library.evolve(config, workers=1)
 digest = lambda value: hashlib.sha256(json.dumps(value, sort_keys=True).encode()).hexdigest()[:16]
+ADDED = ("normalised_hypervolume",)  # columns newer than some trees: hashed apart
+curve = [{k: v for k, v in row.items() if k not in ADDED} for row in result.curve]
+added = [{k: row[k] for k in ADDED if k in row} for row in result.curve]
 best = result.best
 if best and best.get("sim", {}).get("profile", "paper") == "paper":  # the paper's own settings:
     sim = {k: v for k, v in best["sim"].items() if k not in PROFILE_SETTINGS}  # those of a tree
     best = {**best, "sim": sim}  # before profiles, whose values in this profile are its zeros
-print(json.dumps({"curve": digest(result.curve), "best": digest(best),
+print(json.dumps({"curve": digest(curve), "best": digest(best),
+                  "added": digest(added) if any(added) else None,
                   "archive": digest(result.archive), "last": result.curve[-1]}))
 """
 
@@ -148,10 +174,12 @@ def compare_trees(old: Path, new: Path | None) -> int:
                 print(f"{name:16} not in --tree ({error})")
                 continue
             after = run(config, against)
-            same = all(before[key] == after[key] for key in ("curve", "best", "archive"))
-            differences += not same
-            differ = [key for key in ("curve", "best", "archive") if before[key] != after[key]]
-            verdict = "same" if same else "DIFFERENT " + ",".join(differ)
+            keys = ["curve", "best", "archive"] + (["added"] if before.get("added") else [])
+            differ = [key for key in keys if before[key] != after[key]]
+            differences += bool(differ)
+            verdict = "same" if not differ else "DIFFERENT " + ",".join(differ)
+            if after.get("added") and not before.get("added"):
+                verdict += " (+ normalised_hypervolume, new here)"
             print(
                 f"{name:16} {verdict}  curve {after['curve']}  "
                 f"best so far {after['last']['best_so_far']!r}"

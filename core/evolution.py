@@ -147,4 +147,5 @@ class Evolution:
         `QD_COLUMNS` for a run with an archive, `PARETO_COLUMNS` for one with objectives)."""
         columns = curve_columns(bool(self.config.descriptors), bool(self.config.objectives))
         rows = (stats.to_json() for stats in self.state.history)
-        return [{column: row[column] for column in columns} for row in rows]
+        # a generation run before a column existed (a resumed run) has none of it
+        return [{column: row[column] for column in columns if column in row} for row in rows]

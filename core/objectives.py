@@ -46,24 +46,31 @@ def objective_label(objective: str) -> str:
 
 
 #: Every measure of a simulation's record (`SimResult.measures`) a run may name in `objectives`:
-#: name -> (unit, goal it is usually given, hypervolume reference in the measure's own units).
-#: The reference is a value worse than almost any robot's: 0 for what is maximised (a robot that
-#: does not move spans no volume); for cost_of_transport and energy, well above what a random
-#: 4x4x4 paper-voxel robot measures (48 of them, seed 0: cost of transport median about 1,300,
-#: largest about 27,000; energy largest about 44,000 J). A run may give its own (`reference`).
-MEASURES: dict[str, tuple[str, str, float | None]] = {
-    "speed": ("m/s", "max", 0.0),
-    "forward_speed": ("m/s", "max", 0.0),
-    "climb_rate": ("m/s", "max", 0.0),
-    "distance": ("m", "max", 0.0),
-    "efficiency": ("m/J", "max", 0.0),
-    "cost_of_transport": ("1", "min", 100_000.0),
-    "energy": ("J", "min", 1_000_000.0),
-    "heading": ("degrees", "max", None),
-    "stable": ("1", "max", None),
-    "total_mass": ("kg", "min", None),
-    "masses": ("1", "min", None),
-    "springs": ("1", "min", None),
+#: name -> (unit, goal it is usually given, hypervolume reference, ideal), both bounds in the
+#: measure's own units. The reference is a value worse than almost any robot's: 0 for what is
+#: maximised (a robot that does not move spans no volume); for cost_of_transport and energy, well
+#: above what a random 4x4x4 paper-voxel robot measures (48 of them, seed 0: cost of transport
+#: median about 1,300, largest about 27,000; energy largest about 44,000 J). The ideal is a value
+#: better than any robot here is expected to reach, the 1 of the normalised hypervolume (the
+#: reference is its 0; docs/evolution.md "Normalised hypervolume" says why each): 1 m/s is about
+#: four times the fastest gait measured (0.27 m/s) and what a body that falls over in a short
+#: simulation reaches, 10 m that speed over the default 10 s, 0.2 m/s of climb a 1 m/s crawler
+#: up task-slope's 10 degrees, 0.1 m/J a cost of transport of 0.1 for a 10 kg body; no work, no
+#: mass and no parts are the bounds of the others.
+#: A run may give its own of either (`reference`, `ideal`).
+MEASURES: dict[str, tuple[str, str, float | None, float]] = {
+    "speed": ("m/s", "max", 0.0, 1.0),
+    "forward_speed": ("m/s", "max", 0.0, 1.0),
+    "climb_rate": ("m/s", "max", 0.0, 0.2),
+    "distance": ("m", "max", 0.0, 10.0),
+    "efficiency": ("m/J", "max", 0.0, 0.1),
+    "cost_of_transport": ("1", "min", 100_000.0, 0.0),
+    "energy": ("J", "min", 1_000_000.0, 0.0),
+    "heading": ("degrees", "max", None, 180.0),
+    "stable": ("1", "max", None, 1.0),
+    "total_mass": ("kg", "min", None, 0.0),
+    "masses": ("1", "min", None, 0.0),
+    "springs": ("1", "min", None, 0.0),
 }
 
 #: Measures the simulation only takes when asked to count the actuators' work.

@@ -5,7 +5,8 @@ or is interrupted, so an interrupted run still has its partial results:
 
     run.db            the run as the service stores one (SQLite): what `--resume` goes on from
     config.json       the resolved run configuration (preset merged with overrides)
-    curve.csv         one row per generation (the learning curve)
+    curve.csv         one row per generation (the learning curve; a run with objectives adds
+                      hypervolume, front_size and normalised_hypervolume, 0-1)
     curve.json        {"run": config, "generations": [rows]}, the same as `softevo run --json`
     best_robot.json   the fastest robot so far, a softevo.robot/1 file
     state.json        the genetic algorithm's state (JSON), for inspection
@@ -20,7 +21,8 @@ or is interrupted, so an interrupted run still has its partial results:
                       evaluated (population.csv's columns), and every robot as a dot with the
                       front drawn over them
     hypervolume.png   a run with objectives: the hypervolume of the front so far against the
-                      simulations run (curve.csv's hypervolume and evaluations)
+                      simulations run (curve.csv's hypervolume and evaluations), and dashed
+                      on a right axis its normalised_hypervolume (0-1)
 
 A folder written before run.db (state.json and cache.json were what `--resume` went on from) is
 read here (`read_resumable`) to be imported into a store.
@@ -84,7 +86,7 @@ def write_results(out: Path, evolution: Evolution) -> None:
             writer.writerow(
                 [
                     "" if v is None or (isinstance(v, float) and math.isnan(v)) else v
-                    for v in (row[c] for c in columns)
+                    for v in (row.get(c) for c in columns)  # a resumed run's older rows
                 ]
             )
     os.replace(temporary, out / "curve.csv")

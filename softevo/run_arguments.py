@@ -138,8 +138,9 @@ def _search_arguments(run: argparse.ArgumentParser) -> None:
         type=_names,
         metavar="A,-B",
         help="several objectives at once, measures of the simulation (a leading - minimises), "
-        "e.g. speed,-cost_of_transport, with --algorithm nsga2 or afpo: adds hypervolume and "
-        "front_size to the curve, writes front.csv and front.png (docs/evolution.md)",
+        "e.g. speed,-cost_of_transport, with --algorithm nsga2 or afpo: adds hypervolume, "
+        "front_size and normalised_hypervolume (0-1) to the curve, writes front.csv and "
+        "front.png (docs/evolution.md)",
     )
 
 

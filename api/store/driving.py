@@ -270,6 +270,7 @@ _INSERT_GENERATION = DriverStatement(
         qd_score=bindparam("b_qd_score"),
         hypervolume=bindparam("b_hypervolume"),
         front_size=bindparam("b_front_size"),
+        normalised_hypervolume=bindparam("b_normalised_hypervolume"),
         seconds=bindparam("b_seconds"),
         committed_at=bindparam("b_at"),
         **{key: bindparam(f"b_{key}") for key in CURVE_FIELDS},
@@ -301,6 +302,7 @@ def commit_generation(db: Database, run_id: int, lease: Lease, commit: Generatio
                     "b_qd_score": stats.get("qd_score"),
                     "b_hypervolume": stats.get("hypervolume"),
                     "b_front_size": stats.get("front_size"),
+                    "b_normalised_hypervolume": stats.get("normalised_hypervolume"),
                     "b_seconds": commit.seconds,
                     "b_at": at,
                 }

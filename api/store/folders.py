@@ -98,7 +98,7 @@ def totals(db: Database, run_id: int) -> tuple[int, int, int, float]:
         return row.generations_done, row.evaluations, row.saved, row.compute_seconds
 
 
-_OPTIONAL = ("coverage", "qd_score", "hypervolume", "front_size")
+_OPTIONAL = ("coverage", "qd_score", "hypervolume", "front_size", "normalised_hypervolume")
 
 
 def history(db: Database, run_id: int) -> list[dict[str, Any]]:

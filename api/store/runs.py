@@ -217,6 +217,8 @@ def _curve_row(row: GenerationRow) -> dict[str, Any]:
         data.update(coverage=row.coverage, qd_score=row.qd_score)
     if row.front_size is not None:
         data.update(hypervolume=row.hypervolume, front_size=row.front_size)
+    if row.normalised_hypervolume is not None:  # none before revision 0007
+        data["normalised_hypervolume"] = row.normalised_hypervolume
     return data
 
 

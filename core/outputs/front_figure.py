@@ -158,7 +158,8 @@ def hypervolume_unit(specs: Sequence[ObjectiveSpec]) -> str:
 def hypervolume_figure(specs: Sequence[ObjectiveSpec], curve: Sequence[Row], title: str) -> Figure:
     """The hypervolume of the front so far after each generation against the simulations run
     until then (the curve's `evaluations`, summed): what a fair comparison of algorithms with
-    different generation sizes reads."""
+    different generation sizes reads; and, on a right axis, its normalised hypervolume (0-1)
+    where the curve has it."""
     plt = pyplot()
     figure, axes = plt.subplots(figsize=(6.4, 3.8))
     spent = np.cumsum([int(row.get("evaluations") or 0) for row in curve])
@@ -180,8 +181,9 @@ def hypervolume_figure(specs: Sequence[ObjectiveSpec], curve: Sequence[Row], tit
     axes.set_ylim(bottom=0)
     axes.set_xlim(left=0)
     axes.set_title(title, fontsize=9)
+    scaled = _normalised(axes, spent, curve, specs)
     axes.annotate(
-        f"the volume the front dominates, bounded by the reference point: {reference}",
+        f"the volume the front dominates, bounded by the reference point: {reference}{scaled}",
         xy=(0, 0),
         xycoords="axes fraction",
         xytext=(0, -30),
@@ -191,3 +193,23 @@ def hypervolume_figure(specs: Sequence[ObjectiveSpec], curve: Sequence[Row], tit
     )
     figure.tight_layout()
     return figure
+
+
+def _normalised(
+    axes: Any, spent: np.ndarray, curve: Sequence[Row], specs: Sequence[ObjectiveSpec]
+) -> str:
+    """The curve's normalised hypervolume, dashed on a right axis from 0 to 1 (nothing for a
+    curve without it), and the words that say what it is ("" when not drawn)."""
+    scaled = np.array([from_null(row.get("normalised_hypervolume")) for row in curve], dtype=float)
+    if not np.isfinite(scaled).any():
+        return ""
+    right = axes.twinx()
+    right.plot(spent, scaled, "--", drawstyle="steps-post", color="C3", linewidth=1.2)
+    right.set_ylim(0, 1)
+    right.set_ylabel("normalised hypervolume (0-1)", color="C3")
+    bounds = ", ".join(
+        f"{spec.measure.replace('_', ' ')} {spec.reference:g} to {spec.ideal:g}" for spec in specs
+    )
+    return (
+        f";\ndashed: normalised, each objective from its reference (0) to its ideal (1):\n{bounds}"
+    )

@@ -224,7 +224,11 @@ def normalised_hypervolume(values: np.ndarray, ideal: np.ndarray, nadir: np.ndar
         raise ValueError(f"ideal and nadir must be {array.shape[1]} numbers each")
     if not (np.isfinite(top).all() and np.isfinite(bottom).all() and (top > bottom).all()):
         raise ValueError(f"ideal must be finite and above nadir, got {ideal!r} and {nadir!r}")
-    scaled = np.minimum((array - bottom) / (top - bottom), 1.0)
+    with np.errstate(over="ignore", invalid="ignore"):  # a range near 0 or past the floats
+        scaled = (array - bottom) / (top - bottom)
+    # past the ideal counts as it; at or past the reference counts for nothing, so a value
+    # far beyond it (or one that overflowed) is the reference itself: the volume is the same
+    scaled = np.clip(scaled, -NADIR_MARGIN, 1.0)
     reference = np.full(array.shape[1], -NADIR_MARGIN)
     return hypervolume(scaled, reference) / (1.0 + NADIR_MARGIN) ** array.shape[1]
 

@@ -48,10 +48,10 @@ class SearchSettings(BaseModel):
         (),
         description="several objectives at once, by measure name (softevo.core.objectives."
         'MEASURES): ["speed", "-cost_of_transport"], a leading "-" minimising, or objects '
-        '{"measure": ..., "goal": "min", "reference": ...}; stored as objects with the '
-        "hypervolume reference point filled in. nsga2 and afpo select on them; any other "
-        "algorithm keeps the front beside it (curve columns hypervolume, front_size). The "
-        "fitness stays `objective`'s",
+        '{"measure": ..., "goal": "min", "reference": ..., "ideal": ...}; stored as objects '
+        "with the hypervolume reference and ideal points filled in. nsga2 and afpo select on "
+        "them; any other algorithm keeps the front beside it (curve columns hypervolume, "
+        "front_size, normalised_hypervolume). The fitness stays `objective`'s",
     )
     descriptors: tuple[str, ...] = Field(
         (),

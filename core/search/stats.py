@@ -36,9 +36,11 @@ CURVE_COLUMNS = (
 QD_COLUMNS = ("coverage", "qd_score")
 
 #: The columns a run with `objectives` adds: the hypervolume of the non-dominated set of every
-#: individual evaluated so far (against the run's reference point) and how many distinct points
-#: that set holds (`softevo.core.search.vectors`, docs/evolution.md).
-PARETO_COLUMNS = ("hypervolume", "front_size")
+#: individual evaluated so far (against the run's reference point), how many distinct points
+#: that set holds, and its normalised hypervolume (0-1, each objective scaled from its reference
+#: to its ideal, so every objective weighs the same; `softevo.core.search.vectors`,
+#: docs/evolution.md). A generation committed before the last column existed has none.
+PARETO_COLUMNS = ("hypervolume", "front_size", "normalised_hypervolume")
 
 
 def curve_columns(descriptors: bool, objectives: bool) -> tuple[str, ...]:
@@ -70,10 +72,11 @@ class GenerationStats:
     qd_score: float | None = None  # and the sum of its elites' fitness
     hypervolume: float | None = None  # runs with objectives: of the front so far
     front_size: int | None = None  # and its distinct points
+    normalised_hypervolume: float | None = None  # and its volume scaled to the unit box
 
     def to_json(self) -> dict[str, Any]:
         """JSON; a run without an archive has no coverage or qd_score keys, one without
-        objectives no hypervolume or front_size."""
+        objectives no hypervolume, front_size or normalised_hypervolume."""
         values = ((name, getattr(self, name)) for name in _FIELDS)  # all plain numbers
         return {
             k: (to_null(v) if isinstance(v, float) else v)

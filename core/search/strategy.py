@@ -32,7 +32,7 @@ from softevo.core.search.archive import Archive
 from softevo.core.search.descriptors import describe
 from softevo.core.search.state import GAState, Individual, generation_rng
 from softevo.core.search.stats import GenerationStats, generation_stats
-from softevo.core.search.vectors import objective_values, reference_point
+from softevo.core.search.vectors import ideal_point, objective_values, reference_point
 
 if TYPE_CHECKING:
     from softevo.core.search.settings import SearchSettings
@@ -156,8 +156,12 @@ class Strategy(ABC):
         if vectors is not None and objectives:
             front = _front(state.data, vectors)
             data = {**(state.data or {}), FRONT_KEY: front.tolist()}
-            volume = pareto.hypervolume(front, reference_point(objectives))
-            stats = replace(stats, hypervolume=volume, front_size=len(front))
+            nadir = reference_point(objectives)
+            volume = pareto.hypervolume(front, nadir)
+            scaled = pareto.normalised_hypervolume(front, ideal_point(objectives), nadir)
+            stats = replace(
+                stats, hypervolume=volume, front_size=len(front), normalised_hypervolume=scaled
+            )
         if vectors is not None and self.reads_objectives:
             data = {**(data or {}), **self.kept(state, individuals, vectors)}
         following = GAState(

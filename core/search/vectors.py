@@ -2,11 +2,12 @@
 
 `"objectives": ["speed", "-cost_of_transport"]` names measures of the simulation's record
 (`softevo.core.objectives.MEASURES`); a leading `-` minimises. The object form
-`{"measure": "cost_of_transport", "goal": "min", "reference": 50000}` says the same and may set
-the hypervolume reference point (in the measure's own units). A config stores each objective in
-the object form with its reference filled in, so the reference a run's hypervolumes were
-measured against is kept with the run. Every vector is maximised (`softevo.core.search.pareto`):
-a minimised measure enters negated, and so does its reference.
+`{"measure": "cost_of_transport", "goal": "min", "reference": 50000, "ideal": 0}` says the same
+and may set the hypervolume reference point and the ideal point (in the measure's own units):
+the normalised hypervolume scales each objective from its reference (0) to its ideal (1). A
+config stores each objective in the object form with both filled in, so the bounds a run's
+hypervolumes were measured against are kept with the run. Every vector is maximised
+(`softevo.core.search.pareto`): a minimised measure enters negated, and so do its bounds.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ MAX_OBJECTIVES = 4
 
 class ObjectiveSpec(BaseModel):
     """One objective: a measure of the record, whether to maximise or minimise it, and the
-    hypervolume reference point's value for it."""
+    hypervolume reference and ideal points' values for it."""
 
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 
@@ -34,6 +35,10 @@ class ObjectiveSpec(BaseModel):
     goal: Literal["max", "min"] = "max"
     reference: float = Field(
         description="hypervolume reference, in the measure's units: worse than any robot counted"
+    )
+    ideal: float = Field(
+        description="the normalised hypervolume's 1, in the measure's units: better than the "
+        "reference (values past it count as it)"
     )
 
     @property
@@ -67,9 +72,9 @@ def _spec(item: Any, position: int) -> ObjectiveSpec:
         item = {"measure": item[1:], "goal": "min"} if item.startswith("-") else {"measure": item}
     if not isinstance(item, dict):
         raise ValueError(f"{where}: a measure name or an object, got {item!r}")
-    unknown = sorted(set(item) - {"measure", "goal", "reference"})
+    unknown = sorted(set(item) - {"measure", "goal", "reference", "ideal"})
     if unknown:
-        raise ValueError(f"{where}: unknown key {unknown[0]!r} (measure, goal, reference)")
+        raise ValueError(f"{where}: unknown key {unknown[0]!r} (measure, goal, reference, ideal)")
     named = item.get("measure")
     if named not in MEASURES:
         raise ValueError(f"{where}: unknown measure {named!r} (measures: {', '.join(MEASURES)})")
@@ -78,16 +83,48 @@ def _spec(item: Any, position: int) -> ObjectiveSpec:
     if given not in ("max", "min"):
         raise ValueError(f"{where}: goal must be 'max' or 'min', got {given!r}")
     goal: Literal["max", "min"] = "min" if given == "min" else "max"
-    reference = item.get("reference")
-    if reference is None:  # absent or null: the measure's default
-        reference = MEASURES[measure][2]
+    reference = _bound(item, "reference", MEASURES[measure][2], where)
     if reference is None:
         raise ValueError(f"{where}: {measure} has no default reference point, give `reference`")
-    if isinstance(reference, bool) or not isinstance(reference, int | float):
-        raise ValueError(f"{where}: reference must be a number, got {reference!r}")
-    if not math.isfinite(reference):
-        raise ValueError(f"{where}: reference must be finite, got {reference!r}")
-    return ObjectiveSpec(measure=measure, goal=goal, reference=float(reference))
+    sign = 1.0 if goal == "max" else -1.0
+    ideal = _bound(item, "ideal", None, where)
+    if ideal is None:
+        ideal = _default_ideal(measure, sign, reference, where)
+    elif sign * (ideal - reference) <= 0:
+        better = "above" if goal == "max" else "below"
+        raise ValueError(
+            f"{where}: ideal must be better than the reference ({better} {reference:g}), "
+            f"got {ideal!r}"
+        )
+    return ObjectiveSpec(measure=measure, goal=goal, reference=reference, ideal=ideal)
+
+
+def _bound(item: dict[str, Any], key: str, default: float | None, where: str) -> float | None:
+    """`reference` or `ideal` of an object, a finite number (absent or null: `default`)."""
+    value = item.get(key)
+    if value is None:
+        return default
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ValueError(f"{where}: {key} must be a number, got {value!r}")
+    if not math.isfinite(value):
+        raise ValueError(f"{where}: {key} must be finite, got {value!r}")
+    return float(value)
+
+
+def _default_ideal(measure: str, sign: float, reference: float, where: str) -> float:
+    """The measure's ideal (`MEASURES`), or, for a reference given at or past it (a config may
+    have been stored before ideals existed), one default range (or 1 unit) past the reference:
+    every config that loaded before still loads."""
+    _, _, default_reference, ideal = MEASURES[measure]
+    if sign * (ideal - reference) > 0:
+        return ideal
+    span = abs(ideal - default_reference) if default_reference is not None else 1.0
+    shifted = reference + sign * span
+    if shifted == reference:  # a reference so large that the span is below its precision
+        shifted = math.nextafter(reference, sign * math.inf)
+    if not math.isfinite(shifted):
+        raise ValueError(f"{where}: no ideal is better than reference {reference!r}, give `ideal`")
+    return shifted
 
 
 def needs_energy(specs: Sequence[ObjectiveSpec]) -> bool:
@@ -98,6 +135,11 @@ def needs_energy(specs: Sequence[ObjectiveSpec]) -> bool:
 def reference_point(specs: Sequence[ObjectiveSpec]) -> np.ndarray:
     """The hypervolume reference point, maximised ([M])."""
     return np.array([spec.sign * spec.reference for spec in specs], dtype=np.float64)
+
+
+def ideal_point(specs: Sequence[ObjectiveSpec]) -> np.ndarray:
+    """The normalised hypervolume's ideal point, maximised ([M]; the nadir is the reference)."""
+    return np.array([spec.sign * spec.ideal for spec in specs], dtype=np.float64)
 
 
 def objective_values(

@@ -107,3 +107,18 @@ def test_the_hypervolume_figure_counts_simulations_on_x() -> None:
     assert axes.get_xlabel() == "simulations run (cumulative)"
     assert axes.get_ylabel() == "hypervolume (m/s)"
     assert any("cost of transport 100000" in text.get_text() for text in axes.texts)
+
+
+def test_the_hypervolume_figure_draws_the_normalised_one_on_a_right_axis() -> None:
+    curve = [
+        {"generation": 0, "evaluations": 16, "hypervolume": 100.0},  # before the column existed
+        {"generation": 1, "evaluations": 8, "hypervolume": 101.0, "normalised_hypervolume": 0.25},
+    ]
+    axes, right = hypervolume_figure(SPECS, curve, "hypervolume").axes
+    (line,) = right.get_lines()
+    assert line.get_xdata().tolist() == [16, 24]
+    assert np.isnan(line.get_ydata()[0]) and line.get_ydata()[1] == 0.25
+    assert right.get_ylim() == (0, 1) and right.get_ylabel() == "normalised hypervolume (0-1)"
+    words = " ".join(text.get_text() for text in axes.texts)
+    said = "from its reference (0) to its ideal (1):\nspeed 0 to 1, cost of transport 100000 to 0"
+    assert said in words

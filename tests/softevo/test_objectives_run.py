@@ -5,16 +5,19 @@ from __future__ import annotations
 
 import csv
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from softevo import library
 from softevo.core.config import resolve
+from softevo.core.evolution import Evolution
+from softevo.core.physics.evaluation import SerialEvaluator
 from softevo.core.search import pareto
 from softevo.core.search.front import front_values
 from softevo.core.search.vectors import objective_values, reference_point
-from softevo.results import read_results
+from softevo.results import read_results, write_results
 from tests.softevo.inprocess import softevo
 
 SMALL = {
@@ -52,6 +55,30 @@ def test_a_run_without_objectives_measures_no_energy_and_keeps_its_columns() -> 
     assert "hypervolume" not in result.curve[-1]
 
 
+def test_a_run_stopped_before_the_normalised_hypervolume_goes_on(tmp_path: Path) -> None:
+    """A run whose config and first generation were stored before ideals existed: the config
+    loads with the defaults, the old row stays without the column, the new one has it."""
+    stored = library.configure(SMALL, algorithm="nsga2", objectives=OBJECTIVES).to_json()
+    stored["objectives"] = [
+        {k: v for k, v in o.items() if k != "ideal"} for o in stored["objectives"]
+    ]
+    config = resolve(stored)
+    evolution = Evolution.start(config)
+    evolution.step(SerialEvaluator())
+    first = replace(evolution.state.history[0], normalised_hypervolume=None)
+    state = replace(evolution.state, history=[first])
+    evolution = Evolution.resume(config, state, evolution.cache, measures=evolution.measures)
+    evolution.step(SerialEvaluator())
+    old, new = evolution.curve()
+    assert "normalised_hypervolume" not in old and 0 < new["normalised_hypervolume"] <= 1
+    whole = library.evolve({**SMALL, "generations": 2}, algorithm="nsga2", objectives=OBJECTIVES)
+    assert new == whole.curve[1]  # the resumed generation is the uninterrupted one
+    assert old == {k: v for k, v in whole.curve[0].items() if k != "normalised_hypervolume"}
+    write_results(tmp_path, evolution)
+    lines = (tmp_path / "curve.csv").read_text().splitlines()
+    assert lines[1].endswith(",") and not lines[2].endswith(",")
+
+
 def test_softevo_run_writes_the_pareto_columns(tmp_path: Path) -> None:
     out = tmp_path / "run"
     done = softevo(
@@ -77,8 +104,9 @@ def test_softevo_run_writes_the_pareto_columns(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr
     with (out / "curve.csv").open(encoding="utf-8") as handle:
         rows = list(csv.DictReader(handle))
-    assert list(rows[0])[-2:] == ["hypervolume", "front_size"]
+    assert list(rows[0])[-3:] == ["hypervolume", "front_size", "normalised_hypervolume"]
     assert float(rows[-1]["hypervolume"]) > 0 and int(rows[-1]["front_size"]) >= 1
+    assert 0 < float(rows[-1]["normalised_hypervolume"]) <= 1
     assert (out / "front.png").stat().st_size > 0
     assert (out / "hypervolume.png").stat().st_size > 0  # against the simulations run
     config, _, individuals = read_results(out)

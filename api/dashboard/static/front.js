@@ -1,6 +1,7 @@
 // A run with objectives: its Pareto front over every robot evaluated (the first two objectives,
 // as measured, each named with its unit and goal, with tick labels; an axis one outlier would
-// squash is logarithmic or clipped), filling live, and the hypervolume over the simulations run.
+// squash is logarithmic or clipped), filling live, and the hypervolume (raw, and normalised 0-1)
+// over the simulations run.
 // A click on a point of the front replays that robot.
 import { api, chart, h, onLeave, softevo } from "./api.js";
 import { axisScale, hypervolumeUnit, measureLabel, significant, ticks } from "./units.js";
@@ -185,13 +186,21 @@ export function frontPanel(run, parent, replay, everyone) {
 }
 
 // x: the simulations run until each generation was committed (the curve's evaluations summed),
-// y: the hypervolume of the front so far
+// y: the hypervolume of the front so far, and its normalised hypervolume (0-1; null for a
+// generation committed before the column existed)
 export function hypervolumeData(curve) {
   let spent = 0;
-  return [curve.map((r) => (spent += r.evaluations || 0)), curve.map((r) => r.hypervolume ?? null)];
+  return [curve.map((r) => (spent += r.evaluations || 0)), curve.map((r) => r.hypervolume ?? null),
+    curve.map((r) => r.normalised_hypervolume ?? null)];
 }
 
-// the hypervolume chart of a run with objectives (null for one without); `show(curve)` redraws it
+// "speed 0 to 0.5, cost of transport 100000 to 0": each objective's reference (0) and ideal (1)
+const bounds = (objectives) =>
+  objectives.map((o) => `${o.measure.replace(/_/g, " ")} ${o.reference} to ${o.ideal ?? "?"}`).join(", ");
+
+// the hypervolume chart of a run with objectives (null for one without); `show(curve)` redraws it.
+// Raw (left axis, the objectives' units) and normalised (right axis, 0-1: each objective scaled
+// from its reference to its ideal, so both ends of a front count alike)
 export function hypervolumeChart(run, curve, parent) {
   const objectives = run.config.objectives || [];
   if (!objectives.length) return null;
@@ -199,13 +208,19 @@ export function hypervolumeChart(run, curve, parent) {
   const unitText = hypervolumeUnit(objectives);
   let generations = [];
   const atGeneration = (u, v, s, i) => (v === null || i === null || i === undefined ? "–" : `${v} (generation ${generations[i]})`);
-  const plot = chart("hypervolume", `Hypervolume of the front so far (${unitText}; reference point: ${reference})`, {
-    scales: { x: { time: false, range: (u, min, max) => [0, Math.max(max, 1)] }, y: { range: (u, min, max) => [0, Math.max(max * 1.05, 1e-9)] } },
-    axes: [{ label: "simulations run (cumulative)" }, { label: `hypervolume (${unitText})`, size: 70 }],
+  const stepped = uPlot.paths.stepped({ align: 1 });
+  const title = `Hypervolume of the front so far (${unitText}; reference point: ${reference}) and normalised `
+    + `(0-1, each objective scaled from reference to ideal: ${bounds(objectives)})`;
+  const plot = chart("hypervolume", title, {
+    scales: { x: { time: false, range: (u, min, max) => [0, Math.max(max, 1)] },
+      y: { range: (u, min, max) => [0, Math.max(max * 1.05, 1e-9)] }, normalised: { range: [0, 1] } },
+    axes: [{ label: "simulations run (cumulative)" }, { label: `hypervolume (${unitText})`, size: 70 },
+      { scale: "normalised", side: 1, label: "normalised (0-1)", size: 70, grid: { show: false } }],
     series: [{ label: "simulations", value: atGeneration },
-      { label: "hypervolume", stroke: "#2f6fb5", width: 1.5, paths: uPlot.paths.stepped({ align: 1 }),
-        value: (u, v) => significant(v) }],
-  }, [[], []], parent);
+      { label: "hypervolume", stroke: "#2f6fb5", width: 1.5, paths: stepped, value: (u, v) => significant(v) },
+      { label: "normalised (0-1)", scale: "normalised", stroke: "#c0392b", width: 1.5, dash: [6, 3],
+        paths: stepped, value: (u, v) => (v === null || v === undefined ? "–" : v.toFixed(3)) }],
+  }, [[], [], []], parent);
   const show = (rows) => { generations = rows.map((r) => r.generation); plot.setData(hypervolumeData(rows)); };
   show(curve);
   return { plot, show };

@@ -154,14 +154,16 @@ def _csv(rows: list[dict[str, Any]]) -> str:
     writer = csv.writer(buffer, lineterminator="\n")
     writer.writerow(columns)
     for row in rows:
-        writer.writerow(["" if row[c] is None else repr(row[c]) for c in columns])
+        # .get: a generation committed before a column existed has none of it
+        writer.writerow(["" if row.get(c) is None else repr(row[c]) for c in columns])
     return buffer.getvalue()
 
 
 @router.get(
     "/{run_id}/curve",
-    responses={**NOT_FOUND, 200: {"content": {"text/csv": {}}}},
-    response_model_exclude_unset=True,  # coverage, qd_score, hypervolume, front_size: some runs
+    # the model documents the JSON rows (their Pareto columns included) in the OpenAPI schema
+    responses={**NOT_FOUND, 200: {"model": Curve, "content": {"text/csv": {}}}},
+    response_model_exclude_unset=True,  # coverage, qd_score, the Pareto columns: some runs
 )
 def get_curve(
     run_id: RunId,
@@ -169,8 +171,8 @@ def get_curve(
     format: Annotated[Literal["json", "csv"], Query()] = "json",
 ) -> Any:
     """One row per committed generation: best, mean, median, min, best so far, diversity, ...
-    (and coverage, qd_score for a run with descriptors; hypervolume, front_size for a run with
-    objectives)."""
+    (and coverage, qd_score for a run with descriptors; hypervolume, front_size and
+    normalised_hypervolume, 0-1, for a run with objectives)."""
     store.get_run(db, run_id)
     rows = store.curve(db, run_id)
     if format == "csv":

@@ -1,7 +1,8 @@
 """The dashboard's Pareto front (issue 36): a run with objectives shows the scatter of its
 front, the same points as `GET /runs/{id}/front`, and a click on a point replays that robot.
 Issue 48: the front is drawn over every robot evaluated, the page names the objectives, the
-hypervolume is charted over the simulations run, and the runs list says the algorithm."""
+hypervolume is charted over the simulations run, and the runs list says the algorithm. Issue
+51: beside it, the normalised hypervolume (0-1), with each objective's reference and ideal."""
 
 from __future__ import annotations
 
@@ -85,6 +86,12 @@ def readable(browser: Any, service: httpx.Client, run_id: int) -> None:
     assert browser.evaluate("window.softevo.charts.hypervolume.data[0]") == spent
     volumes = browser.evaluate("window.softevo.charts.hypervolume.data[1]")
     assert volumes == [r["hypervolume"] for r in curve]
+    scaled = browser.evaluate("window.softevo.charts.hypervolume.data[2]")  # issue 51
+    assert scaled == [r["normalised_hypervolume"] for r in curve] and 0 < scaled[-1] <= 1
+    title = browser.text_content("#hypervolume h3")
+    assert "normalised (0-1, each objective scaled from reference to ideal: speed 0 to 1" in title
+    series = "[...document.querySelectorAll('#hypervolume .u-series')].map(s => s.textContent)"
+    assert browser.evaluate(series)[-1] == f"normalised (0-1){scaled[-1]:.3f}"
     legend = "[...document.querySelectorAll('#population .u-series')].map(s => s.textContent)"
     assert browser.evaluate(legend)[-1] == f"failed0 of {len(everyone)}"  # a value, not clipped
     browser.goto(f"{browser.base}/#/")

@@ -14,7 +14,7 @@ from softevo.core.robots.encoding_registry import make_encoding
 from softevo.core.search import pareto
 from softevo.core.search.algorithm import GAConfig, GAState, make_strategy
 from softevo.core.search.state import Individual
-from softevo.core.search.vectors import objective_values, reference_point
+from softevo.core.search.vectors import ideal_point, objective_values, reference_point
 
 OBJECTIVES = ["speed", "-cost_of_transport"]
 
@@ -85,12 +85,16 @@ def test_curve_rows_carry_the_front_so_far_and_its_hypervolume(algorithm: str) -
     )
     volumes = [stats.hypervolume for stats in run.state.history]
     assert volumes == sorted(volumes) and volumes[-1] > volumes[0]
+    specs = config.objectives
+    scaled = pareto.normalised_hypervolume(values, ideal_point(specs), reference_point(specs))
+    assert last.normalised_hypervolume == pytest.approx(scaled, rel=1e-12) and 0 < scaled < 1
 
 
 def test_runs_without_objectives_keep_their_columns() -> None:
     run = Run(1, algorithm="ga", objectives=[])
     row = run.finish()[-1]
     assert "hypervolume" not in row and "front_size" not in row
+    assert "normalised_hypervolume" not in row
     assert run.state.data is None
 
 
