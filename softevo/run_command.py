@@ -54,11 +54,24 @@ def _not_anothers(args: argparse.Namespace, out: Path, config: RunConfig) -> Non
 
     # config.json, and the run in run.db (config.json may be gone)
     found = (config_json(out), stored_config(out))
-    if any(stored is not None and stored != config.to_json() for stored in found):
+    if any(stored is not None and not _same_config(stored, config) for stored in found):
         args.parser.error(
             f"--out {out}: holds the results of another config; give another --out, "
             f"or --resume {out} to go on with that run"
         )
+
+
+def _same_config(stored: object, config: RunConfig) -> bool:
+    """Whether a stored config is `config`, read as this version reads it (a config stored
+    before objectives had an ideal gains the default one, as the run itself would)."""
+    if stored == config.to_json():
+        return True
+    if not isinstance(stored, dict):
+        return False
+    try:
+        return resolve(stored).to_json() == config.to_json()
+    except (ConfigError, TypeError, ValueError):
+        return False
 
 
 def _folder(args: argparse.Namespace) -> Folder:

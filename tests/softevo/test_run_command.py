@@ -308,3 +308,21 @@ def test_another_configs_store_is_refused_without_its_config_json(tmp_path: Path
     refused = softevo(*run, "--seed", "9")
     assert refused.returncode == 2 and "holds the results of another config" in refused.stderr
     assert (out / "run.db").is_file() and softevo("run", "--resume", str(out)).returncode == 0
+
+
+def test_a_folder_of_the_same_config_stored_before_ideals_is_not_anothers(tmp_path: Path) -> None:
+    """A config stored before objectives had an ideal reads, as this version reads it, as the
+    same config: its folder is run again, not refused as another config's."""
+    out = tmp_path / "before-ideals"
+    run = ("run", *SMALL, "--shape", "2x2x2", "--generations", "1", "--out", str(out))
+    run += ("--algorithm", "nsga2", "--objectives", "speed,-cost_of_transport")
+    assert softevo(*run).returncode == 0
+    stored = json.loads((out / "config.json").read_text())
+    assert all("ideal" in spec for spec in stored["objectives"])
+    for spec in stored["objectives"]:
+        del spec["ideal"]
+    (out / "config.json").write_text(json.dumps(stored))
+    again = softevo(*run)
+    assert again.returncode == 0, again.stderr
+    refused = softevo(*run, "--seed", "9")  # another config is still refused
+    assert refused.returncode == 2 and "holds the results of another config" in refused.stderr
