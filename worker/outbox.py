@@ -43,7 +43,7 @@ class Outbox:
         self._lock = threading.Lock()
         self._pending: deque[_Letter] = deque()
         self._busy = False  # a thread is sending
-        self.sends = 0  # round trips made, and jobs sent by them (`bench/scaling.py` reads both)
+        self.sends = 0  # round trips made, and the jobs they sent (what batching saved)
         self.jobs = 0
 
     def send(self, data: EnqueueData) -> None:
