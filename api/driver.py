@@ -29,7 +29,7 @@ from softevo.api.store.driving import (
 )
 from softevo.core.config import RunConfig
 from softevo.core.evaluator import BatchResult, Evaluator
-from softevo.core.search.algorithm import GAState, Individual, make_strategy
+from softevo.core.search.configured import Individual, StrategyState, make_strategy
 from softevo.core.search.generation import Hooks, Step, Stepper
 from softevo.core.search.state import parents_text
 from softevo.core.status import RunStatus
@@ -209,7 +209,7 @@ class RunDriver(Hooks):
         """Run the remaining generations; errors raise (`run` records them on the run)."""
         stored_config, stored_state = store.driving.load(self.db, self.run_id)
         config = RunConfig.model_validate(stored_config)
-        algorithm = make_strategy(config.ga_config(), config.make_encoding())
+        algorithm = make_strategy(config.strategy_settings(), config.make_encoding())
         driving = self.driving
         stepper = Stepper(
             algorithm,
@@ -219,7 +219,9 @@ class RunDriver(Hooks):
             config.objective,
             config.max_simulations,
         )
-        state = GAState.from_json(stored_state) if stored_state else algorithm.start(config.seed)
+        state = (
+            StrategyState.from_json(stored_state) if stored_state else algorithm.start(config.seed)
+        )
         cache, measures = store.driving.known_fitness(self.db, self.run_id, state.generation)
         simulations = store.get_run(self.db, self.run_id).evaluations  # of the committed rows
         while not stepper.done(state, simulations):

@@ -19,7 +19,7 @@ from softevo.core.config import ConfigError, RunConfig, resolve
 from softevo.core.robots.encodings import Encoding, EncodingError
 from softevo.core.robots.genome import Genome
 from softevo.core.search.registry import strategy_class
-from softevo.core.search.state import GAState, Individual
+from softevo.core.search.state import Individual, StrategyState
 from softevo.core.search.steady_state import window_size
 
 
@@ -43,7 +43,7 @@ def check_folder(folder: Path, generations: int | None = None) -> None:
     except ConfigError as error:
         raise ResumeError(f"config.json: {error}") from None
     try:
-        state = GAState.from_json(state_json)
+        state = StrategyState.from_json(state_json)
     except (KeyError, TypeError, ValueError, AttributeError) as error:
         raise ResumeError(f"state.json: not a run's state ({error!r})") from None
     _check_state(config, state, state_json)
@@ -84,7 +84,7 @@ def _expect(ok: bool, where: str, what: str, value: Any) -> None:
 
 
 def _check_state_json(state: Any) -> None:
-    """The shape and types of state.json, field by field (what GAState.from_json would
+    """The shape and types of state.json, field by field (what StrategyState.from_json would
     otherwise coerce silently: "ab" as parents, 1.5 as a gene)."""
     _expect(isinstance(state, dict), "state.json", "an object", state)
     for name in ("seed", "generation"):
@@ -211,7 +211,7 @@ def _check_cache_json(cache: Any) -> None:
         _expect(isinstance(records, dict), f"cache.json: {name}", "an object", records)
 
 
-def _check_state(config: RunConfig, state: GAState, raw: dict[str, Any]) -> None:
+def _check_state(config: RunConfig, state: StrategyState, raw: dict[str, Any]) -> None:
     """The state against the run's config: its seed, generation, population sizes, the genes
     of every genome under the config's encoding, parents within the previous generation."""
     if state.seed != config.seed:
@@ -263,7 +263,7 @@ def _check_state(config: RunConfig, state: GAState, raw: dict[str, Any]) -> None
         )
 
 
-def _check_births(config: RunConfig, encoding: Encoding, state: GAState) -> None:
+def _check_births(config: RunConfig, encoding: Encoding, state: StrategyState) -> None:
     """A steady-state run's births: as many told as its generations hold, a birth number per
     member, and the window of births in flight after them, each a genome of the encoding."""
     kept = (state.data or {}).get("steady")
@@ -319,7 +319,7 @@ def _check_genome(encoding: Encoding, genome: Genome, where: str) -> None:
             raise ResumeError(f"{where}.real: {value!r} is outside its bounds [{low:g}, {high:g}]")
 
 
-def _check_archive(config: RunConfig, encoding: Encoding, state: GAState) -> None:
+def _check_archive(config: RunConfig, encoding: Encoding, state: StrategyState) -> None:
     archive = state.archive
     assert archive is not None
     if archive.names != config.descriptors or archive.bins != config.bins:

@@ -12,18 +12,18 @@ from __future__ import annotations
 
 from softevo.core.search import operators
 from softevo.core.search.registry import GROUP, StrategyError, strategies, strategy_class
-from softevo.core.search.state import GAState, Individual
+from softevo.core.search.state import Individual, StrategyState
 from softevo.core.search.strategy import NoOptions, Records, Strategy
 from softevo.core.search.variation import mate, mutant
 
 __all__ = [
     "GROUP",
-    "GAState",
     "Individual",
     "NoOptions",
     "Records",
     "Strategy",
     "StrategyError",
+    "StrategyState",
     "mate",
     "mutant",
     "operators",

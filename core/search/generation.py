@@ -28,7 +28,7 @@ from softevo.core.limits import BATCH_SIZE, IN_FLIGHT, SMALL_BATCH, SMALL_POINTS
 from softevo.core.robots.encodings import Encoding
 from softevo.core.robots.robot_file import robot_to_json
 from softevo.core.robots.settings import SimSettings
-from softevo.core.search.algorithm import GAState, Individual, Strategy
+from softevo.core.search.configured import Individual, Strategy, StrategyState
 from softevo.core.search.step import Hooks, Step
 from softevo.core.search.stream import Flights, stream_step
 from softevo.core.search.vectors import needs_energy
@@ -49,7 +49,7 @@ class Stepper:
     objective: str = "speed"
     max_simulations: int | None = None
 
-    def done(self, state: GAState, simulations: int) -> bool:
+    def done(self, state: StrategyState, simulations: int) -> bool:
         """Whether the run ends at `state`: its strategy is done, or the `simulations` of its
         rows so far reach the run's `max_simulations` (rows are the same for any number of
         workers, so is where the run ends)."""
@@ -102,7 +102,7 @@ class Stepper:
 
     def step(
         self,
-        state: GAState,
+        state: StrategyState,
         cache: dict[str, float],
         evaluator: Evaluator,
         hooks: Hooks | None = None,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from softevo.core.search.state import GAState, Individual
+from softevo.core.search.state import Individual, StrategyState
 from softevo.core.search.strategy import Strategy
 
 
@@ -12,5 +12,5 @@ class RandomSearch(Strategy):
     name = "random"
     summary = "random search: `population` new random genomes every generation"
 
-    def breed(self, state: GAState, rng: np.random.Generator) -> list[Individual]:
+    def breed(self, state: StrategyState, rng: np.random.Generator) -> list[Individual]:
         return self.first(rng)

@@ -16,7 +16,7 @@ a told birth joins a population not yet full; after that it replaces the worst m
 strictly better (the oldest of equally bad members goes first), so the best never falls and a
 failed robot never enters. Every P told births make one curve row ("generation").
 
-The births in flight live in `GAState.data["steady"]`, so a stored state resumes the same
+The births in flight live in `StrategyState.data["steady"]`, so a stored state resumes the same
 sequence; `Nursery` is the mutable working copy the generation step tells one birth at a time.
 """
 
@@ -33,7 +33,7 @@ from pydantic import Field
 
 from softevo.core.search import operators
 from softevo.core.search.archive import Archive
-from softevo.core.search.state import GAState, Individual
+from softevo.core.search.state import Individual, StrategyState
 from softevo.core.search.stats import GenerationStats
 from softevo.core.search.strategy import Strategy
 from softevo.core.search.variation import VariationOptions, explore_child, mate
@@ -41,7 +41,7 @@ from softevo.core.search.variation import VariationOptions, explore_child, mate
 if TYPE_CHECKING:
     from softevo.core.search.settings import SearchSettings
 
-#: The key of `GAState.data` holding the births in flight and the population's birth numbers.
+#: The key of `StrategyState.data` holding the births in flight and the population's birth numbers.
 KEY = "steady"
 #: The widest window, in populations: the W births in flight are stored with every row (and its
 #: first W births are random), and 4 populations already fed two RQ workers (BENCHMARKS.md).
@@ -150,14 +150,14 @@ class SteadyState(Strategy):
     def total(self) -> int:
         return self.config.population * self.config.generations
 
-    def ask(self, state: GAState) -> list[Individual]:
+    def ask(self, state: StrategyState) -> list[Individual]:
         """The births in flight (bred, not told), oldest first."""
         return [birth.individual for birth in self.nursery(state).window]
 
-    def breed(self, state: GAState, rng: np.random.Generator) -> list[Individual]:
+    def breed(self, state: StrategyState, rng: np.random.Generator) -> list[Individual]:
         raise RuntimeError("steady-state breeds one birth at a time (Nursery.tell)")
 
-    def nursery(self, state: GAState, cache: Any = ()) -> Nursery:
+    def nursery(self, state: StrategyState, cache: Any = ()) -> Nursery:
         """The working copy of `state` the step tells births to; `cache` (genome hashes
         evaluated before) marks the first births of a new run that repeat a genome."""
         last = self.__dict__.get("_last")
@@ -227,7 +227,7 @@ class Nursery:
     numbers; `window` the births in flight, oldest first."""
 
     strategy: SteadyState
-    state: GAState
+    state: StrategyState
     population: list[Individual]
     fitness: list[float]
     births: list[int]
@@ -235,7 +235,7 @@ class Nursery:
     window: deque[Birth]
     row: list[tuple[Individual, float, dict[str, float], bool]] = field(default_factory=list)
     hashes: Counter[str] = field(default_factory=Counter)  # of the window's genomes
-    following: GAState | None = None  # the state `finish` gave
+    following: StrategyState | None = None  # the state `finish` gave
     #: (rank, birth, slot) of every member, a heap: its top is the member a better birth
     #: replaces (the worst fitness, NaN lowest; of equals, the oldest birth), in O(log P)
     worst: list[tuple[float, int, int]] = field(default_factory=list, repr=False)
@@ -312,7 +312,7 @@ class Nursery:
             self.births[slot] = birth.number
             heapq.heapreplace(self.worst, (fitness, birth.number, slot))
 
-    def finish(self) -> tuple[GAState, GenerationStats]:
+    def finish(self) -> tuple[StrategyState, GenerationStats]:
         """The state after the row's P births, and its curve row."""
         individuals = [item[0] for item in self.row]
         saved = sum(1 for item in self.row if item[3])

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from softevo.core.evaluator import BatchResult
-from softevo.core.search.state import GAState, Individual
+from softevo.core.search.state import Individual, StrategyState
 from softevo.core.search.stats import GenerationStats
 
 
@@ -61,5 +61,5 @@ class Step:
     measures: list[dict[str, float]]  # of every individual, in order (empty: none known)
     evaluated: frozenset[int]  # indices whose fitness came from this step (not from the cache)
     stats: GenerationStats
-    state: GAState  # the state after the generation was told
+    state: StrategyState  # the state after the generation was told
     seconds: float

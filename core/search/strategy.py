@@ -1,6 +1,6 @@
 """The strategy protocol: what every search algorithm is, built in or installed by a user.
 
-A strategy is pure ask/tell over explicit state (`GAState`, which round-trips through JSON),
+A strategy is pure ask/tell over explicit state (`StrategyState`, which round-trips through JSON),
 in the spirit of evosax and pyribs. `ask(state)` gives the individuals to evaluate next;
 `tell(state, individuals, fitness, measures=...)` takes what they measured and returns the next
 state and one learning-curve row. Neither changes the state it is given, so whoever holds the
@@ -30,7 +30,7 @@ from softevo.core.robots.encodings import Encoding
 from softevo.core.search import pareto
 from softevo.core.search.archive import Archive
 from softevo.core.search.descriptors import describe
-from softevo.core.search.state import GAState, Individual, generation_rng
+from softevo.core.search.state import Individual, StrategyState, generation_rng
 from softevo.core.search.stats import GenerationStats, generation_stats
 from softevo.core.search.vectors import ideal_point, objective_values, reference_point
 
@@ -50,7 +50,7 @@ class NoOptions(BaseModel):
 class Strategy(ABC):
     """One search algorithm. Subclasses set `name`, `summary`, `uses` and `Options`, and
     implement `breed`; the shared `tell` keeps the best so far, the archive and the curve row,
-    and a strategy that needs more overrides it (and may keep JSON in `GAState.data`; the key
+    and a strategy that needs more overrides it (and may keep JSON in `StrategyState.data`; the key
     `front` there is the shared `tell`'s, for a run with `objectives`)."""
 
     name: ClassVar[str]
@@ -90,13 +90,13 @@ class Strategy(ABC):
         default a population, the generation the next is bred from."""
         return config.population
 
-    def start(self, seed: int) -> GAState:
-        return GAState(seed=seed)
+    def start(self, seed: int) -> StrategyState:
+        return StrategyState(seed=seed)
 
-    def done(self, state: GAState) -> bool:
+    def done(self, state: StrategyState) -> bool:
         return state.generation >= self.config.generations
 
-    def ask(self, state: GAState) -> list[Individual]:
+    def ask(self, state: StrategyState) -> list[Individual]:
         """The individuals to evaluate next (always the same for one state)."""
         if self.done(state):
             raise RuntimeError(f"the run has finished its {self.config.generations} generations")
@@ -113,19 +113,19 @@ class Strategy(ABC):
         return [Individual(self.encoding.random(rng), "random") for _ in range(population)]
 
     @abstractmethod
-    def breed(self, state: GAState, rng: np.random.Generator) -> list[Individual]:
+    def breed(self, state: StrategyState, rng: np.random.Generator) -> list[Individual]:
         """The next individuals, from the last told ones (`state.previous`, their fitness
         `state.previous_fitness`) or the archive, drawing only from `rng`."""
 
     def tell(
         self,
-        state: GAState,
+        state: StrategyState,
         individuals: list[Individual],
         fitness: np.ndarray | list[float],
         *,
         measures: Records | None = None,
         **counts: int,
-    ) -> tuple[GAState, GenerationStats]:
+    ) -> tuple[StrategyState, GenerationStats]:
         """The state after `individuals` (what `ask(state)` gave) scored `fitness` (NaN =
         failed) and measured `measures`, and the curve row; `counts` (evaluations, saved, ...)
         are stored with the row."""
@@ -164,7 +164,7 @@ class Strategy(ABC):
             )
         if vectors is not None and self.reads_objectives:
             data = {**(data or {}), **self.kept(state, individuals, vectors)}
-        following = GAState(
+        following = StrategyState(
             seed=state.seed,
             generation=state.generation + 1,
             current=None,
@@ -178,14 +178,18 @@ class Strategy(ABC):
         return following, stats
 
     def kept(
-        self, state: GAState, individuals: list[Individual], values: np.ndarray
+        self, state: StrategyState, individuals: list[Individual], values: np.ndarray
     ) -> dict[str, Any]:
-        """What a strategy with `reads_objectives` keeps in `GAState.data` (JSON) of a told
+        """What a strategy with `reads_objectives` keeps in `StrategyState.data` (JSON) of a told
         batch whose maximised objective values are `values` ([N, M]); nothing by default."""
         return {}
 
     def archive(
-        self, state: GAState, individuals: list[Individual], fitness: np.ndarray, records: Records
+        self,
+        state: StrategyState,
+        individuals: list[Individual],
+        fitness: np.ndarray,
+        records: Records,
     ) -> Archive | None:
         """The archive after these individuals (None for a run without descriptors): each
         robot that did not fail is offered to the cell its descriptors (of its body, and of
@@ -225,7 +229,7 @@ class Strategy(ABC):
         }
 
 
-#: The key of `GAState.data` under which a run with objectives keeps its front so far: the
+#: The key of `StrategyState.data` under which a run with objectives keeps its front so far: the
 #: distinct maximised points no evaluated individual dominates (strategies keep other keys).
 FRONT_KEY = "front"
 

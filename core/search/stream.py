@@ -20,7 +20,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from softevo.core.evaluator import CHECK_SECONDS, BatchResult, Evaluator, hand_over, names_digest
-from softevo.core.search.state import GAState, Individual
+from softevo.core.search.state import Individual, StrategyState
 from softevo.core.search.steady_state import Birth, Nursery, SteadyState
 from softevo.core.search.step import Hooks, Step
 from softevo.core.search.strategy import Strategy
@@ -148,7 +148,7 @@ class _Row:
 
 def stream_step(
     stepper: Stepper,
-    state: GAState,
+    state: StrategyState,
     cache: dict[str, float],
     evaluator: Evaluator,
     hooks: Hooks,

@@ -23,7 +23,7 @@ from softevo.core.config import resolve
 from softevo.core.evaluator import BatchResult
 from softevo.core.nulls import Record, from_null_record
 from softevo.core.physics.evaluation import SerialEvaluator
-from softevo.core.search.algorithm import GAState
+from softevo.core.search.configured import StrategyState
 from tests.api.store.test_store import OWNER, STATS, driven, members
 from tests.api.test_coordinator import wait_status
 from tests.reference import undisturbed
@@ -226,7 +226,7 @@ def test_a_run_stored_at_revision_0003_is_taken_over_with_the_undisturbed_curve(
             second.stop()
         reference = undisturbed(QD_REQUEST)
         assert store.curve(db, run.id) == reference.curve()
-        state = GAState.from_json(store.driving.load(db, run.id)[1])
+        state = StrategyState.from_json(store.driving.load(db, run.id)[1])
         assert state.archive is not None and reference.state.archive is not None
         assert state.archive.to_json() == reference.state.archive.to_json()
     finally:
