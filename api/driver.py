@@ -1,9 +1,9 @@
-"""One run driven by the coordinator: the generation step of `softevo.core.search.generation` with
-persistence around it (`RunDriver`, the step's hooks). The generation's individuals are kept
-before anything is evaluated (a streaming strategy's births with the next write), batches'
-fitness is saved as it lands (a batch that lands within `save_seconds` of the run's last write
-waits for the next one), and the generation is committed in one transaction. The GA state of the
-last committed generation is all a successor needs (see `softevo.api.coordinator`)."""
+"""One run driven by the coordinator: the step of `softevo.core.search.generation` with
+persistence around it (`RunDriver`, the step's hooks). Births are written with the next write
+(a row's commit keeps the next row's, so a generation is in the store before it is evaluated),
+batches' fitness is saved as it lands (a batch that lands within `save_seconds` of the run's
+last write waits for the next one), and each row is committed in one transaction. The strategy
+state of the last committed row is all a successor needs (see `softevo.api.coordinator`)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import logging
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 from sqlalchemy.exc import InterfaceError, InternalError, OperationalError
@@ -68,10 +68,9 @@ class RunDriver(Hooks):
         self.abort, self.alarm = threading.Event(), threading.Event()  # alarm: wakes the step
         self.reason = ""
         self.landed: list[Landed] = []  # batches' fitness not written yet
-        self.kept: int | None = None  # the generation this driver's last commit kept
         self.written = time.monotonic()  # when this driver last wrote
         self.generation: int | None = None  # the generation being evaluated
-        self.members: list[Member] = []  # a streaming strategy's births not written yet
+        self.members: list[Member] = []  # births asked and not written yet
         self.stored: dict[tuple[int, int], Any] | None = None  # its births found at takeover
         self.last_birth = (-1, -1)  # (generation, index) of the last birth kept
 
@@ -95,14 +94,6 @@ class RunDriver(Hooks):
 
     # -- the hooks of the generation step -------------------------------------------------------
 
-    def individuals(
-        self, generation: int, individuals: list[Individual]
-    ) -> tuple[dict[int, float], dict[int, dict[str, float]]]:
-        if generation == self.kept:  # kept by this driver's last commit, nothing evaluated since
-            return {}, {}
-        self.written = time.monotonic()
-        return self._fenced(store.driving.keep_generation, generation, members(individuals))
-
     def batch(self, generation: int, indices: list[int], result: BatchResult) -> None:
         fitness = dict(zip(indices, result.fitness.tolist(), strict=True))
         measures = dict(zip(indices, result.records(), strict=True))
@@ -114,8 +105,8 @@ class RunDriver(Hooks):
     def births(
         self, generation: int, individuals: dict[int, Individual]
     ) -> tuple[dict[int, float], dict[int, dict[str, float]]]:
-        """Births are written with the next write; the first call (the window, after a
-        takeover) finds those a predecessor kept, and what it evaluated."""
+        """Births are written with the next write (a row's commit keeps the next row's); the
+        first call (after a takeover) finds those a predecessor kept, and what it evaluated."""
         if self.stored is None:
             self.stored = store.births.stored_births(self.db, self.run_id, generation)
         known: dict[int, float] = {}
@@ -229,16 +220,13 @@ class RunDriver(Hooks):
             self.generation = state.generation
             step = stepper.step(state, cache, self.driving.evaluator, self, self.key, measures)
             state, simulations = step.state, simulations + step.stats.evaluations
-            upcoming: list[Individual] = []
-            done = stepper.done(state, simulations)
-            if not done and not algorithm.streaming:  # bred now, kept by the same commit
-                upcoming = algorithm.ask(state)
-                state = replace(state, current=upcoming)
-            self._commit(step, upcoming, done)
+            self._commit(step, stepper.done(state, simulations))
 
-    def _commit(self, step: Step, upcoming: list[Individual], done: bool) -> None:
-        """The generation's fitness, statistics, GA state and counters and the next generation's
-        members, all or nothing."""
+    def _commit(self, step: Step, done: bool) -> None:
+        """The row's fitness, statistics, strategy state and counters and the births asked
+        since the last write (the next row's, unless the run is `done`), all or nothing."""
+        generation = step.stats.generation
+        births = [item for item in self.members if not done or item[0] <= generation]
         best, archive = step.state.best, step.state.archive
         commit = GenerationCommit(
             stats=step.stats.to_json(),
@@ -259,12 +247,10 @@ class RunDriver(Hooks):
             best=None if best is None else (best[1], best[2]),
             done=done,
             seconds=step.seconds,
-            upcoming=members(upcoming),
-            members=self.members,
+            members=births,
         )
         self.landed, self.members, self.written = [], [], time.monotonic()
         self._fenced(store.driving.commit_generation, commit)
-        self.kept = step.stats.generation + 1 if upcoming else None
         self.driving.faults.clear()  # a generation committed: the database takes writes
         self.committed(step)
 

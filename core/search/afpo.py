@@ -22,7 +22,7 @@ import numpy as np
 
 from softevo.core.search import pareto
 from softevo.core.search.state import Individual, StrategyState
-from softevo.core.search.strategy import Strategy
+from softevo.core.search.strategy import Generational
 from softevo.core.search.survivors import SurvivorOptions, n_survivors, told_record, told_values
 from softevo.core.search.variation import explore_mutants, mutant
 
@@ -30,7 +30,7 @@ if TYPE_CHECKING:
     from softevo.core.search.settings import SearchSettings
 
 
-class AFPO(Strategy):
+class AFPO(Generational):
     name = "afpo"
     summary = (
         "age-fitness Pareto optimisation: survivors by Pareto selection on (genotypic age, "

@@ -6,11 +6,11 @@ import numpy as np
 
 from softevo.core.search import operators
 from softevo.core.search.state import Individual, StrategyState
-from softevo.core.search.strategy import Strategy
+from softevo.core.search.strategy import Generational
 from softevo.core.search.variation import mutant
 
 
-class HillClimb(Strategy):
+class HillClimb(Generational):
     name = "hillclimb"
     summary = (
         "a (1+lambda) hill climber: the best of the last generation and population-1 mutants of it"

@@ -25,7 +25,7 @@ from softevo.core.search import operators
 from softevo.core.search.archive import Elite
 from softevo.core.search.paper_ga import room_for_children
 from softevo.core.search.state import Individual, StrategyState
-from softevo.core.search.strategy import Strategy
+from softevo.core.search.strategy import Generational
 from softevo.core.search.variation import mate
 
 if TYPE_CHECKING:
@@ -87,7 +87,7 @@ class MapElitesOptions(BaseModel):
         return value
 
 
-class MapElites(Strategy):
+class MapElites(Generational):
     name = "map-elites"
     summary = (
         "quality-diversity: parents drawn from an archive that keeps the best robot of every "

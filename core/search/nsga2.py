@@ -22,12 +22,12 @@ import numpy as np
 
 from softevo.core.search import pareto
 from softevo.core.search.state import Individual, StrategyState
-from softevo.core.search.strategy import Strategy
+from softevo.core.search.strategy import Generational
 from softevo.core.search.survivors import SurvivorOptions, n_survivors, told_record, told_values
 from softevo.core.search.variation import explore_children, mate
 
 
-class NSGA2(Strategy):
+class NSGA2(Generational):
     name = "nsga2"
     summary = (
         "NSGA-II: survivors by non-dominated rank and crowding distance over `objectives` (or "

@@ -34,7 +34,7 @@ from softevo.core.nulls import from_nulls, to_nulls
 from softevo.core.robots.encodings import Encoding
 from softevo.core.search import operators
 from softevo.core.search.state import Individual, StrategyState
-from softevo.core.search.strategy import Strategy
+from softevo.core.search.strategy import Generational
 from softevo.core.search.variation import VariationOptions, explore_children, mate
 
 if TYPE_CHECKING:
@@ -64,7 +64,7 @@ class GAOptions(VariationOptions):
         return value
 
 
-class PaperGA(Strategy):
+class PaperGA(Generational):
     name = "ga"
     summary = (
         "the paper's genetic algorithm: survivors by grouped truncation (or tournament / "

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 
 from softevo.core.search.state import Individual, StrategyState
-from softevo.core.search.strategy import Strategy
+from softevo.core.search.strategy import Generational
 
 
-class RandomSearch(Strategy):
+class RandomSearch(Generational):
     name = "random"
     summary = "random search: `population` new random genomes every generation"
 

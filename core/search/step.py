@@ -1,5 +1,5 @@
 """What a generation step gives back (`Step`) and what happens around it (`Hooks`): the
-contract between the step (`softevo.core.search.generation`, `stream`) and whoever runs it (the
+contract between the step (`softevo.core.search.stream`) and whoever runs it (the
 library, the service's driver), in a module of its own so both sides import it and not each
 other."""
 
@@ -28,28 +28,22 @@ class Hooks:
         (None: at the step's end is soon enough)."""
         return None
 
-    def individuals(
-        self, generation: int, individuals: list[Individual]
-    ) -> tuple[dict[int, float], dict[int, dict[str, float]]]:
-        """The generation is about to be evaluated: keep it; return fitness already known for
-        some of its members (by index; NaN = failed), which are then not simulated again, and
-        the records of measures known for them (a member without one gets an empty record)."""
-        return {}, {}
-
     def batch(self, generation: int, indices: list[int], result: BatchResult) -> None:
-        """One batch's fitness and measures landed (for `indices` of the generation, in
+        """One batch's fitness and measures landed (for `indices` of row `generation`, in
         order)."""
 
     def births(
         self, generation: int, individuals: dict[int, Individual]
     ) -> tuple[dict[int, float], dict[int, dict[str, float]]]:
-        """A streaming strategy bred these members of row `generation` (by index): keep them;
-        return what is known of them, as `individuals` does."""
+        """The strategy asked these members of row `generation` (by index): keep them; return
+        fitness already known for some of them (by index; NaN = failed), which are then not
+        simulated again, and the records of measures known for them (a member without one gets
+        an empty record)."""
         return {}, {}
 
     def flush(self) -> None:
-        """A streaming step's `check` said a write was due and no batch landed since: write
-        what waits."""
+        """The step's `check` said a write was due and no batch landed since: write what
+        waits."""
 
 
 @dataclass(frozen=True)
