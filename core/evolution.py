@@ -106,8 +106,7 @@ class Evolution:
         return self.algorithm.encoding.to_robot(individual.genome, self.config.sim)
 
     def step(self, evaluator: Evaluator) -> GenerationStats:
-        """Evaluate and tell one generation (the one generation step of
-        `softevo.core.search.generation`)."""
+        """Evaluate and tell one row (the one step of `softevo.core.search.generation`)."""
         step = self.stepper.step(self.state, self.cache, evaluator, measures=self.measures)
         self.state = step.state
         self.evaluations += step.stats.evaluations

@@ -48,7 +48,7 @@ class Hooks:
 
 @dataclass(frozen=True)
 class Step:
-    """What one generation step did, and the state after it."""
+    """What one step did (one curve row), and the state after it."""
 
     individuals: list[Individual]
     fitness: np.ndarray  # of every individual, in order (NaN = failed)

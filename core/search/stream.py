@@ -12,6 +12,7 @@ to the hooks, so the commit of this row keeps them.
 
 from __future__ import annotations
 
+import math
 import queue
 import threading
 import time
@@ -63,6 +64,14 @@ class Flights:
         if self.batches >= min(self.in_flight, 2 * workers):
             return False
         return self.batches < workers or waiting >= self.batch_size
+
+    def portion(self, waiting: int) -> int:
+        """Robots for the next batch: up to a batch, but the `waiting` ones shared evenly among
+        the idle workers (5 on 2: 3 and 2, not 4 and 1), so none idles while another runs a
+        long batch before a barrier (a generation's end)."""
+        idle = max(1, self.evaluator.capacity() - self.batches)
+        count = min(waiting, max(math.ceil(waiting / self.batch_size), idle))
+        return min(self.batch_size, math.ceil(waiting / max(1, count)))
 
     def send(self, births: list[Birth], files: list[dict[str, Any]], key: str) -> None:
         names = [birth.individual.genome.hash for birth in births]
@@ -126,7 +135,8 @@ class _Row:
         """Fill free slots with the waiting births (up to a batch each)."""
         while self.waiting and flights.free(len(self.waiting)):
             births: list[Birth] = []
-            while self.waiting and len(births) < flights.batch_size:
+            size = flights.portion(len(self.waiting))
+            while self.waiting and len(births) < size:
                 birth = self.waiting.popleft()
                 genome_hash = birth.individual.genome.hash
                 if genome_hash not in self.cache and genome_hash not in flights.out:
