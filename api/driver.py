@@ -1,9 +1,10 @@
 """One run driven by the coordinator: the step of `softevo.core.search.generation` with
 persistence around it (`RunDriver`, the step's hooks). Births are written with the next write
-(a row's commit keeps the next row's, so a generation is in the store before it is evaluated),
-batches' fitness is saved as it lands (a batch that lands within `save_seconds` of the run's
-last write waits for the next one), and each row is committed in one transaction. The strategy
-state of the last committed row is all a successor needs (see `softevo.api.coordinator`)."""
+(a row's commit keeps the next row's, so a generation after the first is stored before it is
+evaluated), batches' fitness is saved as it lands (a batch that lands within `save_seconds` of
+the run's last write waits for the next one), and each row is committed in one transaction.
+The strategy state of the last committed row is all a successor needs (see
+`softevo.api.coordinator`)."""
 
 from __future__ import annotations
 
