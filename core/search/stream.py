@@ -54,6 +54,7 @@ class Flights:
     alarm: threading.Event  # set when a batch lands (the hooks' alarm, which a stop rings too)
     out: set[str] = field(default_factory=set)  # genome hashes sent and not landed
     batches: int = 0  # batches sent and not landed
+    kept: int = -1  # the last birth (number) handed to the hooks
     landings: queue.SimpleQueue[Landing] = field(default_factory=queue.SimpleQueue)
 
     def free(self, waiting: int) -> bool:
@@ -106,6 +107,7 @@ class _Row:
 
     stepper: Stepper
     cohort: Cohort
+    flights: Flights
     cache: dict[str, float]
     measures: dict[str, dict[str, float]]
     hooks: Hooks
@@ -113,12 +115,14 @@ class _Row:
     waiting: deque[Birth] = field(default_factory=deque)
 
     def keep(self, births: list[Birth]) -> None:
-        """New births: kept by the hooks (which may know their fitness, after a takeover), and
-        queued to go out unless an earlier birth has their genome."""
+        """Births: kept by the hooks unless they were (the hooks may know their fitness, after
+        a takeover), and queued to go out unless an earlier birth has their genome."""
         generations = self.stepper.algorithm.config.generations
         births = [birth for birth in births if birth.row < generations]  # past the end: not sent
-        for generation, members in _by_row(births).items():
-            individuals = {index: births[p].individual for index, p in members.items()}
+        kept, fresh = self.flights.kept, [b for b in births if b.number > self.flights.kept]
+        self.flights.kept = max(kept, fresh[-1].number) if fresh else kept
+        for generation, members in _by_row(fresh).items():
+            individuals = {index: fresh[p].individual for index, p in members.items()}
             known, records = self.hooks.births(generation, individuals)
             for index, value in known.items():
                 genome_hash = individuals[index].genome.hash
@@ -131,8 +135,9 @@ class _Row:
             b for b in births if not b.saved or b.individual.genome.hash not in cache
         )
 
-    def send(self, flights: Flights) -> None:
+    def send(self) -> None:
         """Fill free slots with the waiting births (up to a batch each)."""
+        flights = self.flights
         while self.waiting and flights.free(len(self.waiting)):
             births: list[Birth] = []
             size = flights.portion(len(self.waiting))
@@ -175,14 +180,14 @@ def stream_step(
     started = time.perf_counter()
     cohort = stepper.cohort(state, cache)
     flights = stepper.flights(evaluator, hooks.alarm)
-    row = _Row(stepper, cohort, cache, measures, hooks, key)
+    row = _Row(stepper, cohort, flights, cache, measures, hooks, key)
     row.keep(list(cohort.window))
     try:
         while not cohort.row_done:
             _tell_known(row)
             if cohort.row_done:
                 break
-            row.send(flights)
+            row.send()
             due = hooks.check()
             wait = CHECK_SECONDS if due is None else min(CHECK_SECONDS, due - time.monotonic())
             for births, result, error in flights.take(max(0.0, wait)):
