@@ -1,15 +1,16 @@
 """The coordinator: drives runs generation by generation inside the API process.
 
-For each run it owns (see `store.leases`) it runs the one generation step of
-`softevo.core.search.generation` with persistence around it (`RunDriver`): the generation's
-individuals are kept before anything is evaluated, batches' fitness is saved as it lands (a batch
-that lands within `save_seconds` of the run's last write waits for the next one, so a generation of
-quick batches costs one transaction, not one per batch), and the generation (its remaining fitness,
-statistics, the GA state, the run's counters, and the next generation's members, bred at once)
-is committed in one transaction. The GA state stored with the last committed generation is all a
-successor needs: generation g is bred from (seed, g) and generation g-1 alone, so a run taken over
-after a crash regenerates the same individuals, re-evaluates only those without fitness and ends
-with the same learning curve as an undisturbed run.
+For each run it owns (see `store.leases`) it runs the one step of
+`softevo.core.search.generation` with persistence around it (`RunDriver`): the first
+generation's births are kept with the run's first write and a row's commit keeps the next's,
+batches' fitness is saved as it lands (a batch that lands within `save_seconds` of the run's
+last write waits for the next one, so a generation of quick batches costs one transaction, not
+one per batch), and the row (its remaining fitness, statistics, the strategy state, the run's
+counters, and the next row's births, bred at once) is committed in one transaction. The
+strategy state stored with the last committed row is all a successor needs: generation g is
+bred from (seed, g) and generation g-1 alone, so a run taken over after a crash regenerates
+the same individuals, re-evaluates only those without fitness and ends with the same learning
+curve as an undisturbed run.
 """
 
 from __future__ import annotations

@@ -74,7 +74,9 @@ def run_cost(config: RunConfig) -> Cost:
     )  # an encoding of variable length (cppn) says what a genome of it may take
     elites = min(math.prod(config.bins), individuals) if config.descriptors else 0
     elite_bytes = ELITE_BYTES + ELITE_DESCRIPTOR_BYTES * len(config.descriptors) + genome_bytes
-    state = strategy_class(config.algorithm).state_genomes(config.ga_config()) * genome_bytes
+    state = (
+        strategy_class(config.algorithm).state_genomes(config.strategy_settings()) * genome_bytes
+    )
     simulations = float(box_springs(config.shape)) * config.sim.n_steps * simulated
     return Cost(
         spring_steps=simulations * cost_factor(config),

@@ -1,9 +1,10 @@
-"""One run driven by the coordinator: the generation step of `softevo.core.search.generation` with
-persistence around it (`RunDriver`, the step's hooks). The generation's individuals are kept
-before anything is evaluated (a streaming strategy's births with the next write), batches'
-fitness is saved as it lands (a batch that lands within `save_seconds` of the run's last write
-waits for the next one), and the generation is committed in one transaction. The GA state of the
-last committed generation is all a successor needs (see `softevo.api.coordinator`)."""
+"""One run driven by the coordinator: the step of `softevo.core.search.generation` with
+persistence around it (`RunDriver`, the step's hooks). Births are written with the next write
+(a row's commit keeps the next row's, so a generation after the first is stored before it is
+evaluated), batches' fitness is saved as it lands (a batch that lands within `save_seconds` of
+the run's last write waits for the next one), and each row is committed in one transaction.
+The strategy state of the last committed row is all a successor needs (see
+`softevo.api.coordinator`)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import logging
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 from sqlalchemy.exc import InterfaceError, InternalError, OperationalError
@@ -29,7 +30,7 @@ from softevo.api.store.driving import (
 )
 from softevo.core.config import RunConfig
 from softevo.core.evaluator import BatchResult, Evaluator
-from softevo.core.search.algorithm import GAState, Individual, make_strategy
+from softevo.core.search.configured import Individual, StrategyState, make_strategy
 from softevo.core.search.generation import Hooks, Step, Stepper
 from softevo.core.search.state import parents_text
 from softevo.core.status import RunStatus
@@ -68,10 +69,9 @@ class RunDriver(Hooks):
         self.abort, self.alarm = threading.Event(), threading.Event()  # alarm: wakes the step
         self.reason = ""
         self.landed: list[Landed] = []  # batches' fitness not written yet
-        self.kept: int | None = None  # the generation this driver's last commit kept
         self.written = time.monotonic()  # when this driver last wrote
         self.generation: int | None = None  # the generation being evaluated
-        self.members: list[Member] = []  # a streaming strategy's births not written yet
+        self.members: list[Member] = []  # births asked and not written yet
         self.stored: dict[tuple[int, int], Any] | None = None  # its births found at takeover
         self.last_birth = (-1, -1)  # (generation, index) of the last birth kept
 
@@ -95,14 +95,6 @@ class RunDriver(Hooks):
 
     # -- the hooks of the generation step -------------------------------------------------------
 
-    def individuals(
-        self, generation: int, individuals: list[Individual]
-    ) -> tuple[dict[int, float], dict[int, dict[str, float]]]:
-        if generation == self.kept:  # kept by this driver's last commit, nothing evaluated since
-            return {}, {}
-        self.written = time.monotonic()
-        return self._fenced(store.driving.keep_generation, generation, members(individuals))
-
     def batch(self, generation: int, indices: list[int], result: BatchResult) -> None:
         fitness = dict(zip(indices, result.fitness.tolist(), strict=True))
         measures = dict(zip(indices, result.records(), strict=True))
@@ -114,8 +106,8 @@ class RunDriver(Hooks):
     def births(
         self, generation: int, individuals: dict[int, Individual]
     ) -> tuple[dict[int, float], dict[int, dict[str, float]]]:
-        """Births are written with the next write; the first call (the window, after a
-        takeover) finds those a predecessor kept, and what it evaluated."""
+        """Births are written with the next write (a row's commit keeps the next row's); the
+        first call (after a takeover) finds those a predecessor kept, and what it evaluated."""
         if self.stored is None:
             self.stored = store.births.stored_births(self.db, self.run_id, generation)
         known: dict[int, float] = {}
@@ -209,7 +201,7 @@ class RunDriver(Hooks):
         """Run the remaining generations; errors raise (`run` records them on the run)."""
         stored_config, stored_state = store.driving.load(self.db, self.run_id)
         config = RunConfig.model_validate(stored_config)
-        algorithm = make_strategy(config.ga_config(), config.make_encoding())
+        algorithm = make_strategy(config.strategy_settings(), config.make_encoding())
         driving = self.driving
         stepper = Stepper(
             algorithm,
@@ -219,7 +211,9 @@ class RunDriver(Hooks):
             config.objective,
             config.max_simulations,
         )
-        state = GAState.from_json(stored_state) if stored_state else algorithm.start(config.seed)
+        state = (
+            StrategyState.from_json(stored_state) if stored_state else algorithm.start(config.seed)
+        )
         cache, measures = store.driving.known_fitness(self.db, self.run_id, state.generation)
         simulations = store.get_run(self.db, self.run_id).evaluations  # of the committed rows
         while not stepper.done(state, simulations):
@@ -227,16 +221,13 @@ class RunDriver(Hooks):
             self.generation = state.generation
             step = stepper.step(state, cache, self.driving.evaluator, self, self.key, measures)
             state, simulations = step.state, simulations + step.stats.evaluations
-            upcoming: list[Individual] = []
-            done = stepper.done(state, simulations)
-            if not done and not algorithm.streaming:  # bred now, kept by the same commit
-                upcoming = algorithm.ask(state)
-                state = replace(state, current=upcoming)
-            self._commit(step, upcoming, done)
+            self._commit(step, stepper.done(state, simulations))
 
-    def _commit(self, step: Step, upcoming: list[Individual], done: bool) -> None:
-        """The generation's fitness, statistics, GA state and counters and the next generation's
-        members, all or nothing."""
+    def _commit(self, step: Step, done: bool) -> None:
+        """The row's fitness, statistics, strategy state and counters and the births asked
+        since the last write (the next row's, unless the run is `done`), all or nothing."""
+        generation = step.stats.generation
+        births = [item for item in self.members if not done or item[0] <= generation]
         best, archive = step.state.best, step.state.archive
         commit = GenerationCommit(
             stats=step.stats.to_json(),
@@ -257,12 +248,10 @@ class RunDriver(Hooks):
             best=None if best is None else (best[1], best[2]),
             done=done,
             seconds=step.seconds,
-            upcoming=members(upcoming),
-            members=self.members,
+            members=births,
         )
         self.landed, self.members, self.written = [], [], time.monotonic()
         self._fenced(store.driving.commit_generation, commit)
-        self.kept = step.stats.generation + 1 if upcoming else None
         self.driving.faults.clear()  # a generation committed: the database takes writes
         self.committed(step)
 

@@ -18,7 +18,7 @@ from softevo.core.objectives import Objective
 from softevo.core.robots.settings import SimSettings
 from softevo.core.robots.tasks import TASKS
 from softevo.core.robots.terrain import Terrain
-from softevo.core.search.algorithm import GAConfig
+from softevo.core.search.configured import StrategySettings
 from softevo.core.search.vectors import MAX_OBJECTIVES
 from softevo.core.status import IndividualStatus, RunStatus
 
@@ -98,7 +98,9 @@ def _optional(info: Any) -> Any:
 
 
 #: Every GA setting, optional (None: the preset's value), with its bounds in the schema.
-_GA_FIELDS: dict[str, Any] = {name: _optional(info) for name, info in GAConfig.model_fields.items()}
+_GA_FIELDS: dict[str, Any] = {
+    name: _optional(info) for name, info in StrategySettings.model_fields.items()
+}
 
 
 class ObjectiveIn(BaseModel):
@@ -123,7 +125,9 @@ class ObjectiveIn(BaseModel):
 _GA_FIELDS["objectives"] = (
     list[str | ObjectiveIn] | None,
     Field(
-        None, max_length=MAX_OBJECTIVES, description=GAConfig.model_fields["objectives"].description
+        None,
+        max_length=MAX_OBJECTIVES,
+        description=StrategySettings.model_fields["objectives"].description,
     ),
 )
 RunSettings = create_model("RunSettings", __base__=_RunSettings, **_GA_FIELDS)

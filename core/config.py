@@ -19,7 +19,7 @@ from softevo.core.robots.encoding_registry import encoding_class, make_encoding
 from softevo.core.robots.encodings import PAPER_CUBE_OPTIONS, Encoding, EncodingError
 from softevo.core.robots.settings import SimSettings, format_validation_error
 from softevo.core.robots.tasks import TASKS, task_presets
-from softevo.core.search.algorithm import GAConfig
+from softevo.core.search.configured import StrategySettings
 
 CubeOption = tuple[float, float, float, float]
 #: The paper's nine bounding boxes (Figure 4a), in its order.
@@ -58,7 +58,7 @@ def parse_shape(value: Any) -> tuple[int, int, int]:
     return (value[0], value[1], value[2])
 
 
-class RunConfig(GAConfig):
+class RunConfig(StrategySettings):
     """Everything that defines a run: encoding, bounding box, seed, GA and simulation settings."""
 
     preset: str | None = None
@@ -127,9 +127,9 @@ class RunConfig(GAConfig):
     def make_encoding(self) -> Encoding:
         return make_encoding(self.encoding, self.shape, self.cube_options)
 
-    def ga_config(self) -> GAConfig:
-        return GAConfig.model_validate(
-            {name: getattr(self, name) for name in GAConfig.model_fields}
+    def strategy_settings(self) -> StrategySettings:
+        return StrategySettings.model_validate(
+            {name: getattr(self, name) for name in StrategySettings.model_fields}
         )
 
     def to_json(self) -> dict[str, Any]:

@@ -18,7 +18,7 @@ from typing import Any
 from softevo.core.config import RunConfig
 from softevo.core.evaluator import Evaluator
 from softevo.core.robots.robot import Robot
-from softevo.core.search.algorithm import GAState, Individual, Strategy, make_strategy
+from softevo.core.search.configured import Individual, Strategy, StrategyState, make_strategy
 from softevo.core.search.generation import Stepper
 from softevo.core.search.stats import CURVE_COLUMNS, GenerationStats, curve_columns  # noqa: F401
 
@@ -45,7 +45,7 @@ class Evolution:
 
     config: RunConfig
     stepper: Stepper
-    state: GAState
+    state: StrategyState
     cache: dict[str, float] = field(default_factory=dict)
     measures: dict[str, dict[str, float]] = field(default_factory=dict)
     evaluations: int = 0
@@ -54,7 +54,7 @@ class Evolution:
 
     @classmethod
     def start(cls, config: RunConfig) -> Evolution:
-        algorithm = make_strategy(config.ga_config(), config.make_encoding())
+        algorithm = make_strategy(config.strategy_settings(), config.make_encoding())
         return cls(
             config=config,
             stepper=Stepper(
@@ -70,7 +70,7 @@ class Evolution:
     def resume(
         cls,
         config: RunConfig,
-        state: GAState,
+        state: StrategyState,
         cache: dict[str, float],
         elapsed: float = 0.0,
         measures: dict[str, dict[str, float]] | None = None,
@@ -106,8 +106,7 @@ class Evolution:
         return self.algorithm.encoding.to_robot(individual.genome, self.config.sim)
 
     def step(self, evaluator: Evaluator) -> GenerationStats:
-        """Evaluate and tell one generation (the one generation step of
-        `softevo.core.search.generation`)."""
+        """Evaluate and tell one row (the one step of `softevo.core.search.generation`)."""
         step = self.stepper.step(self.state, self.cache, evaluator, measures=self.measures)
         self.state = step.state
         self.evaluations += step.stats.evaluations

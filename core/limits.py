@@ -17,7 +17,7 @@ SERVICE_MAX_VOXELS = 1000
 #: no chunk smaller than this.
 BATCH_SIZE = 4
 #: Lattice points of the largest box the kernels count as small (the paper's cube has 8, a 2x2x2
-#: box 27): a call of few such robots costs more than their simulation, so a streaming run sends
+#: box 27): a call of few such robots costs more than their simulation, so a run sends
 #: them `SMALL_BATCH` at a time (a full AVX-512 vector of lanes: a paper-cube robot took 3.9 ms in
 #: a call of 8 against 5.9 ms in one of 4, BENCHMARKS.md "Small robots"), and the physics runs
 #: fewer than 4 of them robot by robot.

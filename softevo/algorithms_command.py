@@ -6,7 +6,7 @@ import argparse
 import json
 from typing import Any
 
-from softevo.core.search.algorithm import describe_strategies
+from softevo.core.search.configured import describe_strategies
 from softevo.core.search.registry import GROUP
 
 

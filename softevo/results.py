@@ -44,7 +44,7 @@ from softevo.core.nulls import from_null, from_null_record, to_null
 from softevo.core.outputs import figures
 from softevo.core.outputs.archive_figures import archive_figure
 from softevo.core.outputs.front_figure import front_figure, hypervolume_figure, objectives_text
-from softevo.core.search.algorithm import GAState
+from softevo.core.search.configured import StrategyState
 from softevo.core.search.front import front_rows
 from softevo.core.search.stats import curve_columns
 from softevo.library import Result
@@ -232,7 +232,9 @@ def read_resumable(folder: Path, generations: int | None = None) -> Evolution:
     `generations` if given; ValueError with a one-line reason if it cannot."""
     try:
         config_json = json.loads((folder / "config.json").read_text(encoding="utf-8"))
-        state = GAState.from_json(json.loads((folder / "state.json").read_text(encoding="utf-8")))
+        state = StrategyState.from_json(
+            json.loads((folder / "state.json").read_text(encoding="utf-8"))
+        )
         cache = json.loads((folder / "cache.json").read_text(encoding="utf-8"))
     except (OSError, ValueError, KeyError, TypeError) as error:
         raise ValueError(f"{folder}: not a resumable `softevo run` folder ({error})") from None

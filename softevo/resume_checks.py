@@ -18,9 +18,8 @@ from typing import Any
 from softevo.core.config import ConfigError, RunConfig, resolve
 from softevo.core.robots.encodings import Encoding, EncodingError
 from softevo.core.robots.genome import Genome
-from softevo.core.search.registry import strategy_class
-from softevo.core.search.state import GAState, Individual
-from softevo.core.search.steady_state import window_size
+from softevo.core.search.configured import make_strategy
+from softevo.core.search.state import StrategyState
 
 
 class ResumeError(ValueError):
@@ -43,7 +42,7 @@ def check_folder(folder: Path, generations: int | None = None) -> None:
     except ConfigError as error:
         raise ResumeError(f"config.json: {error}") from None
     try:
-        state = GAState.from_json(state_json)
+        state = StrategyState.from_json(state_json)
     except (KeyError, TypeError, ValueError, AttributeError) as error:
         raise ResumeError(f"state.json: not a run's state ({error!r})") from None
     _check_state(config, state, state_json)
@@ -84,7 +83,7 @@ def _expect(ok: bool, where: str, what: str, value: Any) -> None:
 
 
 def _check_state_json(state: Any) -> None:
-    """The shape and types of state.json, field by field (what GAState.from_json would
+    """The shape and types of state.json, field by field (what StrategyState.from_json would
     otherwise coerce silently: "ab" as parents, 1.5 as a gene)."""
     _expect(isinstance(state, dict), "state.json", "an object", state)
     for name in ("seed", "generation"):
@@ -211,7 +210,7 @@ def _check_cache_json(cache: Any) -> None:
         _expect(isinstance(records, dict), f"cache.json: {name}", "an object", records)
 
 
-def _check_state(config: RunConfig, state: GAState, raw: dict[str, Any]) -> None:
+def _check_state(config: RunConfig, state: StrategyState, raw: dict[str, Any]) -> None:
     """The state against the run's config: its seed, generation, population sizes, the genes
     of every genome under the config's encoding, parents within the previous generation."""
     if state.seed != config.seed:
@@ -225,8 +224,6 @@ def _check_state(config: RunConfig, state: GAState, raw: dict[str, Any]) -> None
         raise ResumeError(f"state.json: previous is null at generation {state.generation}")
     encoding = config.make_encoding()
     size = config.population
-    streaming = strategy_class(config.algorithm).streaming
-    bound = size * state.generation if streaming else size  # parents: births, or indices
     for name in ("current", "previous"):
         items = getattr(state, name)
         if items is None:
@@ -238,13 +235,10 @@ def _check_state(config: RunConfig, state: GAState, raw: dict[str, Any]) -> None
             )
         for i, item in enumerate(items):
             _check_genome(encoding, item.genome, f"state.json: {name}[{i}].genome")
-            if any(parent >= bound for parent in item.parents):
-                what = f"{bound} births told" if streaming else f"a generation of {size}"
-                raise ResumeError(
-                    f"state.json: {name}[{i}].parents: {list(item.parents)} indexes past {what}"
-                )
-    if streaming:
-        _check_births(config, encoding, state)
+    try:  # what the strategy keeps of its own (parents, births in flight)
+        make_strategy(config.strategy_settings(), encoding).check_state(state)
+    except ValueError as error:
+        raise ResumeError(f"state.json: {error}") from None
     fitness = state.previous_fitness
     if state.previous is not None and (fitness is None or len(fitness) != len(state.previous)):
         count = "none" if fitness is None else len(fitness)
@@ -263,63 +257,14 @@ def _check_state(config: RunConfig, state: GAState, raw: dict[str, Any]) -> None
         )
 
 
-def _check_births(config: RunConfig, encoding: Encoding, state: GAState) -> None:
-    """A steady-state run's births: as many told as its generations hold, a birth number per
-    member, and the window of births in flight after them, each a genome of the encoding."""
-    kept = (state.data or {}).get("steady")
-    if state.generation == 0 and kept is None:
-        return
-    told = config.population * state.generation
-    _expect(
-        isinstance(kept, dict) and kept.get("told") == told,
-        "state.json: data.steady.told",
-        f"{told} (the births of {state.generation} generations)",
-        kept.get("told") if isinstance(kept, dict) else kept,
-    )
-    assert isinstance(kept, dict)  # else _expect raised
-    births = kept.get("births")
-    _expect(
-        isinstance(births, list)
-        and len(births) == len(state.previous or [])
-        and all(_is_int(n) and 0 <= n < told for n in births),
-        "state.json: data.steady.births",
-        f"a birth number below {told} per member",
-        births,
-    )
-    window, size = kept.get("window"), window_size(config.options, config.population)
-    _expect(
-        isinstance(window, list) and len(window) == size,
-        "state.json: data.steady.window",
-        f"a list of {size} births (the window)",
-        window,
-    )
-    assert isinstance(window, list)  # else _expect raised
-    for i, item in enumerate(window):
-        where = f"state.json: data.steady.window[{i}]"
-        _expect(
-            isinstance(item, dict)
-            and item.get("n") == told + i
-            and isinstance(item.get("saved"), bool),
-            where,
-            f"birth {told + i} with saved true or false",
-            item,
-        )
-        _check_individual_json(item, where)
-        _check_genome(encoding, Individual.from_json(item).genome, f"{where}.genome")
-
-
 def _check_genome(encoding: Encoding, genome: Genome, where: str) -> None:
     try:
-        encoding.check(genome)
+        encoding.check_stored(genome)
     except EncodingError as error:
         raise ResumeError(f"{where}: {error} (another run's genome?)") from None
-    bounds = encoding.real_bounds_of(genome).tolist()
-    for value, (low, high) in zip(genome.real, bounds, strict=True):
-        if not low <= value <= high:
-            raise ResumeError(f"{where}.real: {value!r} is outside its bounds [{low:g}, {high:g}]")
 
 
-def _check_archive(config: RunConfig, encoding: Encoding, state: GAState) -> None:
+def _check_archive(config: RunConfig, encoding: Encoding, state: StrategyState) -> None:
     archive = state.archive
     assert archive is not None
     if archive.names != config.descriptors or archive.bins != config.bins:

@@ -30,7 +30,7 @@ from softevo.core.config import ConfigError, RunConfig, resolve
 from softevo.core.evolution import Evolution
 from softevo.core.limits import BATCH_SIZE, IN_FLIGHT, SAVE_SECONDS
 from softevo.core.search.generation import Step
-from softevo.core.search.state import GAState
+from softevo.core.search.state import StrategyState
 from softevo.core.search.stats import GenerationStats
 from softevo.results import (
     read_population,
@@ -140,7 +140,7 @@ def resume(out: Path, generations: int | None) -> Folder:
     try:
         stored, state = store.driving.load(db, run_id)
         if state is not None:
-            GAState.from_json(state)
+            StrategyState.from_json(state)
     except (SQLAlchemyError, KeyError, TypeError, ValueError) as error:
         db.dispose()
         raise ValueError(f"{path}: not a run to go on with ({reason(error)})") from None
@@ -263,7 +263,7 @@ def evolution(folder: Folder, known: Known | None = None) -> Evolution:
     known = Known() if known is None else known
     known.update(folder, done)
     history = [GenerationStats.from_json(row) for row in folders.history(folder.db, folder.run_id)]
-    state = replace(GAState.from_json(stored_state), history=history)
+    state = replace(StrategyState.from_json(stored_state), history=history)
     return Evolution.resume(config, state, known.fitness, seconds, known.measures)
 
 

@@ -1,5 +1,6 @@
-"""What a search strategy of your own package imports: the protocol, its state, and the
-built-in variation it may reuse. Register the class in your `pyproject.toml`:
+"""What a search strategy of your own package imports: the protocol (`Generational` for one
+that breeds whole generations; `Strategy` and a `Cohort` of its own for one told birth by birth),
+its state, and the built-in variation it may reuse. Register the class in your `pyproject.toml`:
 
     [project.entry-points."softevo.strategies"]
     my-search = "my_package.search:MySearch"
@@ -11,19 +12,24 @@ service's takeover of a run all find it (docs/evolution.md, "A strategy of your 
 from __future__ import annotations
 
 from softevo.core.search import operators
+from softevo.core.search.cohort import Birth, Cohort, Told
 from softevo.core.search.registry import GROUP, StrategyError, strategies, strategy_class
-from softevo.core.search.state import GAState, Individual
-from softevo.core.search.strategy import NoOptions, Records, Strategy
+from softevo.core.search.state import Individual, StrategyState
+from softevo.core.search.strategy import Generational, NoOptions, Records, Strategy
 from softevo.core.search.variation import mate, mutant
 
 __all__ = [
     "GROUP",
-    "GAState",
+    "Birth",
+    "Cohort",
+    "Generational",
     "Individual",
     "NoOptions",
     "Records",
     "Strategy",
     "StrategyError",
+    "StrategyState",
+    "Told",
     "mate",
     "mutant",
     "operators",

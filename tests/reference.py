@@ -32,7 +32,7 @@ def undisturbed(request: dict[str, Any]) -> Evolution:
 def front_points(request: dict[str, Any], rows: Iterable[Row]) -> list[list[float]]:
     """The distinct maximised points of the front of `rows` (individuals as the store or the
     API gives them) under the request's objectives, sorted as the state keeps its front so far
-    (`GAState.data["front"]`), so a served front compares with the undisturbed run's."""
+    (`StrategyState.data["front"]`), so a served front compares with the undisturbed run's."""
     specs = resolve(request).objectives
     points = front_values(specs, front_rows(specs, rows))
     return np.unique(points, axis=0).tolist()

@@ -11,7 +11,7 @@ from softevo.api.deps import CoordinatorDep, DatabaseDep, SettingsDep, TrustedDe
 from softevo.api.schemas import AlgorithmPublic, Health, Preset
 from softevo.api.settings import Settings
 from softevo.core.config import PRESET_DESCRIPTIONS, PRESETS
-from softevo.core.search.algorithm import describe_strategies
+from softevo.core.search.configured import describe_strategies
 
 router = APIRouter(tags=["meta"])
 

@@ -96,47 +96,8 @@ def known_fitness(
         return fitness, {genome_hash: from_null_record(record) for genome_hash, _, record in rows}
 
 
-def keep_generation(
-    db: Database, run_id: int, lease: Lease, generation: int, members: Sequence[dict[str, Any]]
-) -> tuple[dict[int, float], dict[int, dict[str, float]]]:
-    """Insert the generation's members (dicts of genome, genome_hash, operator, parents), once;
-    if it was kept before (a takeover), check it is the same and return the fitness and
-    records of measures saved (by index)."""
-    with db.write_connection() as connection:
-        _fence(connection, run_id, lease)
-        columns = INDIVIDUALS.c
-        rows = connection.execute(
-            select(
-                columns["index"],
-                columns.genome_hash,
-                columns.status,
-                columns.fitness,
-                columns.measures,
-            ).where(columns.run_id == run_id, columns.generation == generation)
-        ).all()
-        if not rows:
-            _insert_members(connection, run_id, generation, members)
-            return {}, {}
-        # unpacked by column: a Row's `.index` is tuple.index
-        stored = {index: genome_hash for index, genome_hash, *_ in rows}
-        if stored != {index: member["genome_hash"] for index, member in enumerate(members)}:
-            raise GenerationMismatchError(
-                f"generation {generation} in the database differs from the one the GA "
-                "regenerated from the run's seed; refusing to mix them"
-            )
-        done = [
-            (index, fitness, measures)
-            for index, _, status, fitness, measures in rows
-            if status in (IndividualStatus.EVALUATED, IndividualStatus.FAILED)
-        ]
-        return (
-            {index: from_null(fitness) for index, fitness, _ in done},
-            {index: from_null_record(measures) for index, _, measures in done},
-        )
-
-
-#: A member bred by a streaming strategy and not written yet: (generation, index, member as
-#: `keep_generation` takes it).
+#: A birth asked and not written yet: (generation, index, member: genome, genome_hash, operator,
+#: parents).
 Member = tuple[int, int, dict[str, Any]]
 
 
@@ -146,9 +107,8 @@ class GenerationCommit:
     GenerationStats.to_json()), the GA state after it (`state`: its JSON, or its text as
     `EncodedJSON`), the fitness of members copied from earlier generations (`cached`), batches'
     fitness not saved yet (`landed`), the run's best (fitness, generation), the generation's wall
-    time, and, unless the run is `done`, the next generation's members (`upcoming`, as
-    `keep_generation` takes them), so the next step needs no transaction of its own to keep
-    them."""
+    time, and the births asked since the last write (`members`: the next row's too, so the next
+    step needs no transaction of its own to keep them)."""
 
     stats: dict[str, Any]
     state: dict[str, Any] | EncodedJSON
@@ -159,8 +119,7 @@ class GenerationCommit:
     best: tuple[float, int] | None = None
     done: bool = False
     seconds: float = 0.0
-    upcoming: Sequence[dict[str, Any]] = ()
-    members: Sequence[Member] = ()  # a streaming strategy's births not written yet
+    members: Sequence[Member] = ()  # births asked and not written yet
 
 
 def save_fitness(
@@ -172,7 +131,7 @@ def save_fitness(
     members: Sequence[Member] = (),
 ) -> None:
     """Batches' fitness, written once per individual, in one transaction (after the `members`
-    a streaming strategy bred since the last write)."""
+    asked since the last write)."""
     with db.write_connection() as connection:
         _fence(connection, run_id, lease)
         _insert_births(connection, run_id, members)
@@ -181,7 +140,7 @@ def save_fitness(
 
 
 def _insert_births(connection: Connection, run_id: int, members: Sequence[Member]) -> None:
-    """Members bred one at a time, one statement per generation."""
+    """Births asked since the last write, one statement per generation."""
     by_generation: dict[int, dict[int, dict[str, Any]]] = {}
     for generation, index, member in members:
         by_generation.setdefault(generation, {})[index] = member
@@ -279,8 +238,8 @@ _INSERT_GENERATION = DriverStatement(
 
 
 def commit_generation(db: Database, run_id: int, lease: Lease, commit: GenerationCommit) -> None:
-    """The generation's fitness, statistics, GA state and counters, and the next generation's
-    members, all or nothing."""
+    """The row's births asked since the last write (the next row's among them), its fitness,
+    statistics, strategy state and counters, all or nothing."""
     stats = commit.stats
     generation = stats["generation"]
     best = (None, None) if commit.best is None else commit.best
@@ -323,8 +282,6 @@ def commit_generation(db: Database, run_id: int, lease: Lease, commit: Generatio
             _FINISH.execute(connection, [{**advance, "b_at": at}])
         else:
             _ADVANCE.execute(connection, [advance])
-        if not commit.done and commit.upcoming:
-            _insert_members(connection, run_id, generation + 1, commit.upcoming)
 
 
 def fail(db: Database, run_id: int, owner: str, message: str) -> None:

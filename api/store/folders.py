@@ -18,7 +18,7 @@ from softevo.api.store.driving import CURVE_FIELDS
 from softevo.api.store.runs import now
 from softevo.core.config import RunConfig
 from softevo.core.nulls import record_text, to_null
-from softevo.core.search.state import GAState
+from softevo.core.search.state import StrategyState
 from softevo.core.status import IndividualStatus, RunStatus
 
 #: The generation of the fitness cache an imported folder brings (its genomes' generations are
@@ -146,7 +146,7 @@ def population(db: Database, run_id: int, before: int, after: int = -1) -> Itera
 def import_run(
     db: Database,
     config: RunConfig,
-    state: GAState,
+    state: StrategyState,
     known: tuple[Mapping[str, float], Mapping[str, Mapping[str, float]]],
     elapsed: float,
     rows: Sequence[dict[str, Any]],
@@ -165,7 +165,7 @@ def import_run(
         return run.id
 
 
-def _imported_run(config: RunConfig, state: GAState, elapsed: float) -> RunRow:
+def _imported_run(config: RunConfig, state: StrategyState, elapsed: float) -> RunRow:
     """The run's row, running (the import finishes it), with the curve's totals."""
     history = state.history
     best = state.best
@@ -189,7 +189,7 @@ def _imported_run(config: RunConfig, state: GAState, elapsed: float) -> RunRow:
     )
 
 
-def _insert_curve(connection: Connection, run_id: int, state: GAState) -> None:
+def _insert_curve(connection: Connection, run_id: int, state: StrategyState) -> None:
     """The curve's rows from the state's history."""
     if not state.history:
         return

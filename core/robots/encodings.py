@@ -179,6 +179,15 @@ class Encoding(ABC):
         voxel encodings' discrete genes themselves."""
         return genome.discrete
 
+    def check_stored(self, genome: Genome) -> None:
+        """Refuse, as `check` does, a genome read from a file, and one whose real genes are
+        outside their bounds (which no operator of this encoding makes)."""
+        self.check(genome)
+        bounds = self.real_bounds_of(genome).tolist()
+        for value, (low, high) in zip(genome.real, bounds, strict=True):
+            if not low <= value <= high:
+                raise EncodingError(f"real: {value!r} is outside its bounds [{low:g}, {high:g}]")
+
     def real_bounds_of(self, genome: Genome) -> np.ndarray:
         """Bounds of `genome`'s real genes (an encoding of variable length says per genome)."""
         return self.real_bounds

@@ -1,3 +1,4 @@
 """Search: strategies as ask/tell on explicit, JSON-able state (one module per algorithm, found
 through the `softevo.strategies` entry points), their operators, archive and Pareto tools, and
-the one generation step (`generation`, `stream`) that runs any of them."""
+births (`cohort`), the unit of ask/tell, and the one step (`stream`, run by `generation`) that
+runs any of them."""

@@ -11,7 +11,7 @@ and one random newcomer. Age protection lets a new lineage improve before it mus
 old, fit ones, which is what keeps diversity in.
 
 The objectives are the run's `objectives`, or the fitness alone; works with one or several.
-`GAState.data` keeps, as JSON, each member's objective values, birth and lineage start.
+`StrategyState.data` keeps, as JSON, each member's objective values, birth and lineage start.
 """
 
 from __future__ import annotations
@@ -21,15 +21,16 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from softevo.core.search import pareto
-from softevo.core.search.nsga2 import NSGA2, SurvivorOptions, n_survivors, told_values
-from softevo.core.search.state import GAState, Individual
+from softevo.core.search.state import Individual, StrategyState
+from softevo.core.search.strategy import Generational
+from softevo.core.search.survivors import SurvivorOptions, n_survivors, told_record, told_values
 from softevo.core.search.variation import explore_mutants, mutant
 
 if TYPE_CHECKING:
     from softevo.core.search.settings import SearchSettings
 
 
-class AFPO(NSGA2):
+class AFPO(Generational):
     name = "afpo"
     summary = (
         "age-fitness Pareto optimisation: survivors by Pareto selection on (genotypic age, "
@@ -38,6 +39,7 @@ class AFPO(NSGA2):
     uses = ("population", "generations", "objectives", "mutation_genes", "mutation_sigma")
     Options = SurvivorOptions
     options: SurvivorOptions  # typed as its own, which __init__ validates
+    reads_objectives = True
 
     @classmethod
     def check(cls, config: SearchSettings) -> None:
@@ -48,7 +50,7 @@ class AFPO(NSGA2):
             )
 
     def kept(
-        self, state: GAState, individuals: list[Individual], values: np.ndarray
+        self, state: StrategyState, individuals: list[Individual], values: np.ndarray
     ) -> dict[str, Any]:
         """NSGA-II's record and each member's lineage start (`founded`, a generation)."""
         before = (state.data or {}).get("founded", [])
@@ -56,9 +58,9 @@ class AFPO(NSGA2):
             before[item.parents[0]] if item.parents and before else state.generation
             for item in individuals
         ]
-        return {**super().kept(state, individuals, values), "founded": founded}
+        return {**told_record(state, individuals, values), "founded": founded}
 
-    def breed(self, state: GAState, rng: np.random.Generator) -> list[Individual]:
+    def breed(self, state: StrategyState, rng: np.random.Generator) -> list[Individual]:
         config, encoding = self.config, self.encoding
         parents = state.previous or []
         values, born = told_values(state)

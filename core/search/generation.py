@@ -1,34 +1,29 @@
-"""One generation step, the only one: ask -> split the generation into genomes whose fitness is
-known and new ones -> evaluate the new ones in batches, several in flight -> tell.
+"""What runs a run's steps (`Stepper`): the one step of every strategy (`stream.stream_step`),
+its evaluation settings, robot files and batches in flight.
 
 The library (`softevo.core.evolution`) and the service's driver (for the service and for
 `softevo run`) both run it; the driver adds persistence through `Hooks`, never a second copy of
 the loop, so an algorithm plugs in once and runs everywhere. Counting is the same for both: a
-genome seen in an earlier generation of the run is not simulated again (`saved`); within a
-generation, each distinct new genome is simulated once (`evaluations`), and one whose fitness a
-hook already holds (saved before a crash) is counted as evaluated but not simulated again. A
-streaming strategy (`steady-state`) is told one birth at a time instead, its births streamed to
-the evaluator (`softevo.core.search.stream`); its step still ends with one curve row, through
-the same hooks.
+genome seen in an earlier birth of the run is not simulated again (`saved`); each distinct new
+genome is simulated once (`evaluations`), and one whose fitness a hook already holds (saved
+before a crash) is counted as evaluated but not simulated again.
 """
 
 from __future__ import annotations
 
 import math
 import threading
-import time
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
-import numpy as np
-
-from softevo.core.evaluator import BatchResult, Evaluator, evaluate_in_batches
+from softevo.core.evaluator import Evaluator
 from softevo.core.limits import BATCH_SIZE, IN_FLIGHT, SMALL_BATCH, SMALL_POINTS
 from softevo.core.robots.encodings import Encoding
 from softevo.core.robots.robot_file import robot_to_json
 from softevo.core.robots.settings import SimSettings
-from softevo.core.search.algorithm import GAState, Individual, Strategy
+from softevo.core.search.cohort import Cohort
+from softevo.core.search.configured import Individual, Strategy, StrategyState
 from softevo.core.search.step import Hooks, Step
 from softevo.core.search.stream import Flights, stream_step
 from softevo.core.search.vectors import needs_energy
@@ -49,7 +44,7 @@ class Stepper:
     objective: str = "speed"
     max_simulations: int | None = None
 
-    def done(self, state: GAState, simulations: int) -> bool:
+    def done(self, state: StrategyState, simulations: int) -> bool:
         """Whether the run ends at `state`: its strategy is done, or the `simulations` of its
         rows so far reach the run's `max_simulations` (rows are the same for any number of
         workers, so is where the run ends)."""
@@ -83,8 +78,8 @@ class Stepper:
         return needs_energy(self.algorithm.config.objectives)
 
     @cached_property
-    def stream_batch(self) -> int:
-        """Robots per call of a streaming strategy: `batch_size`, or at least `SMALL_BATCH` for
+    def robots_per_call(self) -> int:
+        """Robots per call: `batch_size`, or at least `SMALL_BATCH` for
         robots of a box of at most `SMALL_POINTS` lattice points, whose calls would otherwise
         cost more than their simulations (which are the same bits in any batch)."""
         shape = getattr(self.encoding, "shape", None)
@@ -92,107 +87,36 @@ class Stepper:
         return max(self.batch_size, SMALL_BATCH) if points <= SMALL_POINTS else self.batch_size
 
     def flights(self, evaluator: Evaluator, alarm: threading.Event | None) -> Flights:
-        """The run's batches in flight, kept across the steps of a streaming strategy."""
+        """The run's batches in flight, kept across its steps."""
         flights = self.__dict__.get("_flights")
         if flights is None or flights.evaluator is not evaluator:
             alarm = alarm or threading.Event()
-            flights = Flights(evaluator, self.stream_batch, self.in_flight, alarm)
+            flights = Flights(evaluator, self.robots_per_call, self.in_flight, alarm)
             self.__dict__["_flights"] = flights
         return flights
 
+    def cohort(self, state: StrategyState, known: dict[str, float]) -> Cohort:
+        """Row `state.generation`'s cohort: the last one, if it goes on from `state` (the
+        step's end made it, or a steady-state row goes on in memory), else the strategy's."""
+        last = self.__dict__.get("_cohort")
+        cohort = None if last is None else last.go_on(state)
+        if cohort is None:
+            cohort = self.algorithm.cohort(state, known)
+        self.__dict__["_cohort"] = cohort
+        return cohort
+
     def step(
         self,
-        state: GAState,
+        state: StrategyState,
         cache: dict[str, float],
         evaluator: Evaluator,
         hooks: Hooks | None = None,
         key: str = "local",
         measures: dict[str, dict[str, float]] | None = None,
     ) -> Step:
-        """Run generation `state.generation`. `cache` (genome hash -> fitness of the run's
-        earlier generations) gains this generation's new genomes, and so does `measures`
-        (genome hash -> record of measures, beside it); `key` prefixes batch keys."""
+        """Run row `state.generation`. `cache` (genome hash -> fitness of the run's earlier
+        births) gains this row's new genomes, and so does `measures` (genome hash -> record of
+        measures, beside it); `key` prefixes batch keys."""
         hooks = hooks or Hooks()
         measures = {} if measures is None else measures
-        if self.algorithm.streaming:
-            return stream_step(self, state, cache, evaluator, hooks, key, measures)
-        started = time.perf_counter()
-        generation = state.generation
-        individuals = self.algorithm.ask(state)
-        known, known_measures = hooks.individuals(generation, individuals)
-        hashes = [individual.genome.hash for individual in individuals]
-        first = _first_new(hashes, cache)
-        todo = [index for index in first.values() if index not in known]
-        fitness = {index: known[index] for index in first.values() if index in known}
-        records = {index: known_measures.get(index, {}) for index in fitness}
-        if todo:
-            batch = _Batch(generation, key, todo, [hashes[i] for i in todo])
-            values = self._evaluate(
-                batch, [individuals[i] for i in todo], evaluator, hooks, records
-            )
-            fitness.update(zip(todo, values.tolist(), strict=True))
-        cache.update({hashes[index]: value for index, value in fitness.items()})
-        measures.update({hashes[index]: record for index, record in records.items()})
-        values = np.array([cache[h] for h in hashes], dtype=np.float64)
-        found = [measures.get(h, {}) for h in hashes]
-        evaluations = len(first)
-        following, stats = self.algorithm.tell(
-            state,
-            individuals,
-            values,
-            measures=found,
-            evaluations=evaluations,
-            saved=len(individuals) - evaluations,
-        )
-        seconds = time.perf_counter() - started
-        return Step(
-            individuals, values, found, frozenset(first.values()), stats, following, seconds
-        )
-
-    def _evaluate(
-        self,
-        batch: _Batch,
-        individuals: list[Individual],
-        evaluator: Evaluator,
-        hooks: Hooks,
-        records: dict[int, Any],
-    ) -> np.ndarray:
-        """Simulate the generation's new genomes (`batch.todo`, by index), in batches whose
-        records and fitness the hooks see as they land."""
-        files = [self.robot_file(individual) for individual in individuals]
-
-        def landed(positions: list[int], result: BatchResult) -> None:
-            indices = [batch.todo[p] for p in positions]
-            records.update(zip(indices, result.records(), strict=True))
-            hooks.batch(batch.generation, indices, result)
-
-        return evaluate_in_batches(
-            evaluator,
-            files,
-            f"{batch.key}-gen{batch.generation}",
-            batch_size=self.batch_size,
-            in_flight=self.in_flight,
-            check=hooks.check,
-            on_batch=landed,
-            alarm=hooks.alarm,
-            names=batch.names,  # a robot file is its genome's, in one run
-        )
-
-
-def _first_new(hashes: list[str], cache: dict[str, float]) -> dict[str, int]:
-    """Each genome the cache does not know, by hash, at the index of its first copy."""
-    first: dict[str, int] = {}
-    for index, genome_hash in enumerate(hashes):
-        if genome_hash not in cache and genome_hash not in first:
-            first[genome_hash] = index
-    return first
-
-
-@dataclass(frozen=True)
-class _Batch:
-    """A generation's genomes to simulate: their indices and hashes, and the batches' key."""
-
-    generation: int
-    key: str
-    todo: list[int]
-    names: list[str]
+        return stream_step(self, state, cache, evaluator, hooks, key, measures)

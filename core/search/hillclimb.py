@@ -5,19 +5,19 @@ from __future__ import annotations
 import numpy as np
 
 from softevo.core.search import operators
-from softevo.core.search.state import GAState, Individual
-from softevo.core.search.strategy import Strategy
+from softevo.core.search.state import Individual, StrategyState
+from softevo.core.search.strategy import Generational
 from softevo.core.search.variation import mutant
 
 
-class HillClimb(Strategy):
+class HillClimb(Generational):
     name = "hillclimb"
     summary = (
         "a (1+lambda) hill climber: the best of the last generation and population-1 mutants of it"
     )
     uses = ("population", "generations", "mutation_genes", "mutation_sigma")
 
-    def breed(self, state: GAState, rng: np.random.Generator) -> list[Individual]:
+    def breed(self, state: StrategyState, rng: np.random.Generator) -> list[Individual]:
         """The best of the last generation (so the best so far) and P-1 mutants of it, every
         one mutated with the GA's mutation (`mutation_genes`, `mutation_sigma`)."""
         parents = state.previous or []

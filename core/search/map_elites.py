@@ -24,8 +24,8 @@ from softevo.core.robots.genome import Genome
 from softevo.core.search import operators
 from softevo.core.search.archive import Elite
 from softevo.core.search.paper_ga import room_for_children
-from softevo.core.search.state import GAState, Individual
-from softevo.core.search.strategy import Strategy
+from softevo.core.search.state import Individual, StrategyState
+from softevo.core.search.strategy import Generational
 from softevo.core.search.variation import mate
 
 if TYPE_CHECKING:
@@ -87,7 +87,7 @@ class MapElitesOptions(BaseModel):
         return value
 
 
-class MapElites(Strategy):
+class MapElites(Generational):
     name = "map-elites"
     summary = (
         "quality-diversity: parents drawn from an archive that keeps the best robot of every "
@@ -126,7 +126,7 @@ class MapElites(Strategy):
             return self.encoding.random(rng)
         return spread_random(self.encoding, rng)
 
-    def breed(self, state: GAState, rng: np.random.Generator) -> list[Individual]:
+    def breed(self, state: StrategyState, rng: np.random.Generator) -> list[Individual]:
         """Children of elites drawn uniformly from the archive (`options.variation`), then
         immigrants. Children carry no parent indices (their parents are elites of any
         generation); their operator says `elite-...`."""

@@ -15,7 +15,7 @@ steps 1-4 rank on the weighted sum w . v of the run's `objectives` (v: each meas
 minimised one negated; NaN if any is missing) instead of the fitness. The fitness, best so far
 and the curve stay `objective`'s, and the front is kept beside it as for any algorithm, so a
 weighted GA and NSGA-II are compared on the same front. The sums of the last generation are kept
-in `GAState.data` (`weighted`), so a resumed run selects as the undisturbed one.
+in `StrategyState.data` (`weighted`), so a resumed run selects as the undisturbed one.
 
 Option `variation` "explore" (issue 51, `softevo.core.search.variation`): step 3's children are
 mutated gene by gene and a repeat of a genome already met is re-drawn; immigrants stay random.
@@ -33,15 +33,15 @@ from pydantic import Field, field_validator
 from softevo.core.nulls import from_nulls, to_nulls
 from softevo.core.robots.encodings import Encoding
 from softevo.core.search import operators
-from softevo.core.search.state import GAState, Individual
-from softevo.core.search.strategy import Strategy
+from softevo.core.search.state import Individual, StrategyState
+from softevo.core.search.strategy import Generational
 from softevo.core.search.variation import VariationOptions, explore_children, mate
 
 if TYPE_CHECKING:
     from softevo.core.search.settings import SearchSettings
 
 
-#: The key of `GAState.data` under which a weighted GA keeps the last generation's sums.
+#: The key of `StrategyState.data` under which a weighted GA keeps the last generation's sums.
 WEIGHTED_KEY = "weighted"
 
 
@@ -64,7 +64,7 @@ class GAOptions(VariationOptions):
         return value
 
 
-class PaperGA(Strategy):
+class PaperGA(Generational):
     name = "ga"
     summary = (
         "the paper's genetic algorithm: survivors by grouped truncation (or tournament / "
@@ -109,12 +109,12 @@ class PaperGA(Strategy):
         return weighted or super().breeds_on(config, setting)
 
     def kept(
-        self, state: GAState, individuals: list[Individual], values: np.ndarray
+        self, state: StrategyState, individuals: list[Individual], values: np.ndarray
     ) -> dict[str, list[float | None]]:
         """A weighted GA's sums of the told generation (NaN where an objective failed)."""
         return {WEIGHTED_KEY: to_nulls((values @ self.weights).tolist())}
 
-    def selected_on(self, state: GAState) -> np.ndarray:
+    def selected_on(self, state: StrategyState) -> np.ndarray:
         """What selection ranks the last generation by: the fitness, or the weighted sums."""
         if self.weights is None:
             return np.asarray(state.previous_fitness, dtype=np.float64)
@@ -123,7 +123,7 @@ class PaperGA(Strategy):
             raise ValueError(f"state data: {WEIGHTED_KEY} must hold one sum per individual")
         return from_nulls(sums)
 
-    def breed(self, state: GAState, rng: np.random.Generator) -> list[Individual]:
+    def breed(self, state: StrategyState, rng: np.random.Generator) -> list[Individual]:
         config, encoding = self.config, self.encoding
         parents = state.previous or []
         fitness = self.selected_on(state)

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from softevo.core.search.state import GAState, Individual
-from softevo.core.search.strategy import Strategy
+from softevo.core.search.state import Individual, StrategyState
+from softevo.core.search.strategy import Generational
 
 
-class RandomSearch(Strategy):
+class RandomSearch(Generational):
     name = "random"
     summary = "random search: `population` new random genomes every generation"
 
-    def breed(self, state: GAState, rng: np.random.Generator) -> list[Individual]:
+    def breed(self, state: StrategyState, rng: np.random.Generator) -> list[Individual]:
         return self.first(rng)

@@ -1,6 +1,6 @@
 """Strategies by name, found through the entry-point group `softevo.strategies`.
 
-The four built-ins are registered there by softevo's own `pyproject.toml`, exactly as a user's
+The built-ins are registered there by softevo's own `pyproject.toml`, exactly as a user's
 package registers its own:
 
     [project.entry-points."softevo.strategies"]

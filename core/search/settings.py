@@ -25,7 +25,7 @@ from softevo.core.search.vectors import ObjectiveSpec, parse_objectives
 class SearchSettings(BaseModel):
     """The search settings every run has, read by the strategies (each lists those it reads in
     `uses`); defaults are the paper's phase 3 (`paper-voxel`). Which strategy is named and
-    whether it takes these settings is checked by `GAConfig`, beside the registry."""
+    whether it takes these settings is checked by `StrategySettings`, beside the registry."""
 
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 

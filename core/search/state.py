@@ -42,7 +42,7 @@ def generation_rng(seed: int, generation: int) -> np.random.Generator:
 
 
 @dataclass
-class GAState:
+class StrategyState:
     """Everything needed to go on: the generation being evaluated and the last one evaluated."""
 
     seed: int
@@ -114,7 +114,7 @@ class GAState:
         return "".join(parts) + "}"
 
     @classmethod
-    def from_json(cls, data: dict[str, Any]) -> GAState:
+    def from_json(cls, data: dict[str, Any]) -> StrategyState:
         def individuals(items: list[dict] | None) -> list[Individual] | None:
             return None if items is None else [Individual.from_json(item) for item in items]
 

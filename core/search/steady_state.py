@@ -16,7 +16,7 @@ a told birth joins a population not yet full; after that it replaces the worst m
 strictly better (the oldest of equally bad members goes first), so the best never falls and a
 failed robot never enters. Every P told births make one curve row ("generation").
 
-The births in flight live in `GAState.data["steady"]`, so a stored state resumes the same
+The births in flight live in `StrategyState.data["steady"]`, so a stored state resumes the same
 sequence; `Nursery` is the mutable working copy the generation step tells one birth at a time.
 """
 
@@ -25,15 +25,17 @@ from __future__ import annotations
 import heapq
 import math
 from collections import Counter, deque
+from collections.abc import Container
 from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING, Any, ClassVar, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from pydantic import Field
 
 from softevo.core.search import operators
 from softevo.core.search.archive import Archive
-from softevo.core.search.state import GAState, Individual
+from softevo.core.search.cohort import Birth, Cohort, Told
+from softevo.core.search.state import Individual, StrategyState
 from softevo.core.search.stats import GenerationStats
 from softevo.core.search.strategy import Strategy
 from softevo.core.search.variation import VariationOptions, explore_child, mate
@@ -41,7 +43,7 @@ from softevo.core.search.variation import VariationOptions, explore_child, mate
 if TYPE_CHECKING:
     from softevo.core.search.settings import SearchSettings
 
-#: The key of `GAState.data` holding the births in flight and the population's birth numbers.
+#: The key of `StrategyState.data` holding the births in flight and the population's birth numbers.
 KEY = "steady"
 #: The widest window, in populations: the W births in flight are stored with every row (and its
 #: first W births are random), and 4 populations already fed two RQ workers (BENCHMARKS.md).
@@ -83,23 +85,6 @@ def birth_rng(seed: int, birth: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence([seed, _BIRTHS, birth]))
 
 
-@dataclass(frozen=True)
-class Birth:
-    """A bred individual, its number, and whether an earlier birth had its genome (`saved`:
-    it is not simulated again)."""
-
-    number: int
-    individual: Individual
-    saved: bool
-
-    def to_json(self) -> dict[str, Any]:
-        return {"n": self.number, "saved": self.saved, **self.individual.to_json()}
-
-    @classmethod
-    def from_json(cls, data: dict[str, Any]) -> Birth:
-        return cls(int(data["n"]), Individual.from_json(data), bool(data["saved"]))
-
-
 class SteadyState(Strategy):
     name = "steady-state"
     summary = (
@@ -118,7 +103,6 @@ class SteadyState(Strategy):
     )
     Options = SteadyStateOptions
     options: SteadyStateOptions  # typed as its own, which __init__ validates
-    streaming: ClassVar[bool] = True
 
     @classmethod
     def check(cls, config: SearchSettings) -> None:
@@ -150,27 +134,17 @@ class SteadyState(Strategy):
     def total(self) -> int:
         return self.config.population * self.config.generations
 
-    def ask(self, state: GAState) -> list[Individual]:
-        """The births in flight (bred, not told), oldest first."""
-        return [birth.individual for birth in self.nursery(state).window]
-
-    def breed(self, state: GAState, rng: np.random.Generator) -> list[Individual]:
-        raise RuntimeError("steady-state breeds one birth at a time (Nursery.tell)")
-
-    def nursery(self, state: GAState, cache: Any = ()) -> Nursery:
-        """The working copy of `state` the step tells births to; `cache` (genome hashes
+    def cohort(self, state: StrategyState, known: Container[str] = ()) -> Nursery:
+        """The working copy of `state` the step tells births to; `known` (genome hashes
         evaluated before) marks the first births of a new run that repeat a genome."""
-        last = self.__dict__.get("_last")
-        if last is not None and last.following is state:  # the state its last row gave
-            last.state, last.row, last.following = state, [], None
-            return last
         kept = (state.data or {}).get(KEY)
         if kept is None:  # a new run: births 0 .. W-1, random
             nursery = Nursery(self, state, [], [], [], 0, deque())
             for number in range(self.window):
-                nursery.add(number, self._random(state.seed, number), cache)
+                nursery.add(number, self._random(state.seed, number), known)
             return nursery
-        window = deque(Birth.from_json(item) for item in kept["window"])
+        population = self.config.population
+        window = deque(Birth.from_json(item, population) for item in kept["window"])
         return Nursery(
             self,
             state,
@@ -180,6 +154,39 @@ class SteadyState(Strategy):
             int(kept["told"]),
             window,
         )
+
+    def check_state(self, state: StrategyState) -> None:
+        """The births told are the rows', a birth number per member, the window after them,
+        each a genome of the encoding; parents are births told."""
+        kept = (state.data or {}).get(KEY)
+        if state.generation == 0 and kept is None:
+            return
+        told = self.config.population * state.generation
+        if not isinstance(kept, dict) or kept.get("told") != told:
+            got = kept.get("told") if isinstance(kept, dict) else type(kept).__name__
+            raise ValueError(f"data.steady.told: expected {told} (the rows' births), got {got!r}")
+        births = kept.get("births")
+        members = len(state.previous or [])
+        if (
+            not isinstance(births, list)
+            or len(births) != members
+            or not all(type(n) is int and 0 <= n < told for n in births)
+        ):
+            raise ValueError(f"data.steady.births: expected a birth number below {told} a member")
+        window = kept.get("window")
+        if not isinstance(window, list) or len(window) != self.window:
+            got = len(window) if isinstance(window, list) else type(window).__name__
+            raise ValueError(
+                f"data.steady.window: expected a list of {self.window} births (the window), "
+                f"got {got}"
+            )
+        for i, item in enumerate(window):
+            _check_birth(self, item, told + i, f"data.steady.window[{i}]")
+        for i, member in enumerate(state.previous or []):
+            if any(parent >= told for parent in member.parents):
+                raise ValueError(
+                    f"previous[{i}].parents: {list(member.parents)} indexes past {told} births told"
+                )
 
     def _random(self, seed: int, number: int) -> Individual:
         return Individual(self.encoding.random(birth_rng(seed, number)), "random")
@@ -221,21 +228,21 @@ class SteadyState(Strategy):
 
 
 @dataclass
-class Nursery:
+class Nursery(Cohort):
     """One row of a steady-state run being told, birth by birth (mutable; `finish` gives the
     state). `population`, `fitness` and `births` are the members, their fitness and birth
     numbers; `window` the births in flight, oldest first."""
 
     strategy: SteadyState
-    state: GAState
+    state: StrategyState
     population: list[Individual]
     fitness: list[float]
     births: list[int]
     told: int
     window: deque[Birth]
-    row: list[tuple[Individual, float, dict[str, float], bool]] = field(default_factory=list)
+    row: list[Told] = field(default_factory=list)
     hashes: Counter[str] = field(default_factory=Counter)  # of the window's genomes
-    following: GAState | None = None  # the state `finish` gave
+    following: StrategyState | None = None  # the state `finish` gave
     #: (rank, birth, slot) of every member, a heap: its top is the member a better birth
     #: replaces (the worst fitness, NaN lowest; of equals, the oldest birth), in O(log P)
     worst: list[tuple[float, int, int]] = field(default_factory=list, repr=False)
@@ -264,16 +271,18 @@ class Nursery:
     def row_done(self) -> bool:
         return len(self.row) == self.strategy.config.population
 
-    def add(self, number: int, individual: Individual, cache: Any) -> Birth:
+    def add(self, number: int, individual: Individual, known: Container[str]) -> Birth:
         """Birth `number` joins the window; it is `saved` if an earlier birth had its genome
-        (told: in `cache`; in flight: in the window)."""
+        (told: in `known`; in flight: in the window)."""
         genome_hash = individual.genome.hash
-        birth = Birth(number, individual, genome_hash in cache or genome_hash in self.hashes)
+        saved = genome_hash in known or genome_hash in self.hashes
+        row, index = divmod(number, self.strategy.config.population)
+        birth = Birth(number, individual, saved, row, index)
         self.window.append(birth)
         self.hashes[genome_hash] += 1
         return birth
 
-    def tell(self, fitness: float, record: dict[str, float], cache: Any) -> Birth:
+    def tell(self, fitness: float, record: dict[str, float], known: Container[str]) -> Birth:
         """The oldest birth in flight scored `fitness`: it joins the population (or not), and
         the birth W later is bred and returned. It is bred past the run's last birth too (the
         step never sends those), so a run resumed with more generations has the births an
@@ -292,7 +301,7 @@ class Nursery:
             )
         self.told += 1
         number = self.told - 1 + self.strategy.window
-        return self.add(number, self.strategy.bred(self, number), cache)
+        return self.add(number, self.strategy.bred(self, number), known)
 
     def _replace(self, birth: Birth, fitness: float) -> None:
         if len(self.population) < self.strategy.config.population:
@@ -312,7 +321,7 @@ class Nursery:
             self.births[slot] = birth.number
             heapq.heapreplace(self.worst, (fitness, birth.number, slot))
 
-    def finish(self) -> tuple[GAState, GenerationStats]:
+    def finish(self) -> tuple[StrategyState, GenerationStats]:
         """The state after the row's P births, and its curve row."""
         individuals = [item[0] for item in self.row]
         saved = sum(1 for item in self.row if item[3])
@@ -337,8 +346,33 @@ class Nursery:
             told, previous=list(self.population), previous_fitness=list(self.fitness), data=data
         )
         self.following = state  # the next row goes on from this working copy, not from JSON
-        self.strategy.__dict__["_last"] = self
         return state, stats
+
+    def go_on(self, state: StrategyState) -> Cohort | None:
+        """The next row from this working copy, if `state` is what `finish` gave."""
+        if self.following is not state:
+            return super().go_on(state)
+        self.state, self.row, self.following = state, [], None
+        return self
+
+
+def _check_birth(strategy: SteadyState, item: Any, number: int, where: str) -> None:
+    """Refuse (ValueError naming `where`) a stored birth that is not birth `number` of a genome
+    of the strategy's encoding."""
+    try:
+        birth = Birth.from_json(item, strategy.config.population)
+        strategy.encoding.check_stored(birth.individual.genome)
+    except (KeyError, TypeError, ValueError, AttributeError) as error:
+        raise ValueError(f"{where}: not a birth of this run ({error})") from None
+    parents = birth.individual.parents
+    if birth.number != number or not isinstance(item.get("saved"), bool):
+        raise ValueError(
+            f"{where}: expected birth {number} with saved true or false, got birth {birth.number}"
+        )
+    if not isinstance(birth.individual.operator, str) or not all(
+        type(p) is int and p >= 0 for p in parents
+    ):
+        raise ValueError(f"{where}: expected an operator's name and parents' birth numbers")
 
 
 def _rank(fitness: float) -> float:

@@ -1,25 +1,26 @@
 """The strategy protocol: what every search algorithm is, built in or installed by a user.
 
-A strategy is pure ask/tell over explicit state (`GAState`, which round-trips through JSON),
-in the spirit of evosax and pyribs. `ask(state)` gives the individuals to evaluate next;
-`tell(state, individuals, fitness, measures=...)` takes what they measured and returns the next
-state and one learning-curve row. Neither changes the state it is given, so whoever holds the
-state (`softevo run`, the library, the service's coordinator) decides when it becomes the current
-one. Nothing here assumes whole generations: "generation" is the state's counter of told
-batches, which a generational algorithm fills with one generation each and an asynchronous one
-with any number of births.
+A strategy is pure ask/tell over explicit state (`StrategyState`, which round-trips through
+JSON), in the spirit of evosax, pyribs and Nevergrad, and its unit is a birth: `cohort(state)`
+gives the working copy of one curve row (`softevo.core.search.cohort`), whose births the step
+evaluates and tells back in birth order. A generational strategy (`Generational`) asks for
+its P births at once and is told them as one generation (`ask`, `breed`, and the shared `tell`,
+which gives the next state and the curve row); an asynchronous one (`steady_state`) asks as
+births are told. Nothing changes the state it is given, so whoever holds the state
+(`softevo run`, the library, the service's coordinator) decides when it becomes the current one.
 
 Algorithms are found by name in the entry-point group `softevo.strategies`
 (`softevo.core.search.registry`); each declares its own settings as a pydantic model (`Options`),
-which `POST /runs` and `softevo run` validate under `"options"`. The shared `SearchSettings`
-it reads are listed in `uses`, so `GET /algorithms` shows what each one honours.
+which `POST /runs` and `softevo run` validate under `"options"`, and checks its own state on
+resume (`check_state`). The shared `SearchSettings` it reads are listed in `uses`, so
+`GET /algorithms` shows what each one honours.
 """
 
 from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Mapping, Sequence
+from collections.abc import Container, Mapping, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any, ClassVar
 
@@ -29,8 +30,9 @@ from pydantic import BaseModel, ConfigDict
 from softevo.core.robots.encodings import Encoding
 from softevo.core.search import pareto
 from softevo.core.search.archive import Archive
+from softevo.core.search.cohort import Cohort, Generation
 from softevo.core.search.descriptors import describe
-from softevo.core.search.state import GAState, Individual, generation_rng
+from softevo.core.search.state import Individual, StrategyState, generation_rng
 from softevo.core.search.stats import GenerationStats, generation_stats
 from softevo.core.search.vectors import ideal_point, objective_values, reference_point
 
@@ -48,10 +50,11 @@ class NoOptions(BaseModel):
 
 
 class Strategy(ABC):
-    """One search algorithm. Subclasses set `name`, `summary`, `uses` and `Options`, and
-    implement `breed`; the shared `tell` keeps the best so far, the archive and the curve row,
-    and a strategy that needs more overrides it (and may keep JSON in `GAState.data`; the key
-    `front` there is the shared `tell`'s, for a run with `objectives`)."""
+    """One search algorithm. Subclasses set `name`, `summary`, `uses` and `Options`, and give
+    the step a `cohort` for each row (`Generational` does, from `breed`); the shared `tell`
+    keeps the best so far, the archive and the curve row, and a strategy that needs more
+    overrides it (and may keep JSON in `StrategyState.data`; the key `front` there is the
+    shared `tell`'s, for a run with `objectives`)."""
 
     name: ClassVar[str]
     summary: ClassVar[str]
@@ -64,9 +67,6 @@ class Strategy(ABC):
     #: Whether `tell` hands `kept` each individual's objective values (NSGA-II, AFPO; the GA
     #: with `weights` sets it per instance, from its options).
     reads_objectives: bool = False
-    #: Whether the step tells this strategy one birth at a time (`steady_state.Nursery`)
-    #: rather than a whole generation at once.
-    streaming: ClassVar[bool] = False
 
     def __init__(self, config: SearchSettings, encoding: Encoding) -> None:
         self.config = config
@@ -90,42 +90,39 @@ class Strategy(ABC):
         default a population, the generation the next is bred from."""
         return config.population
 
-    def start(self, seed: int) -> GAState:
-        return GAState(seed=seed)
+    def start(self, seed: int) -> StrategyState:
+        return StrategyState(seed=seed)
 
-    def done(self, state: GAState) -> bool:
+    def done(self, state: StrategyState) -> bool:
         return state.generation >= self.config.generations
 
-    def ask(self, state: GAState) -> list[Individual]:
-        """The individuals to evaluate next (always the same for one state)."""
+    @abstractmethod
+    def cohort(self, state: StrategyState, known: Container[str] = ()) -> Cohort:
+        """The working copy of row `state.generation`, its births asked (a birth whose genome
+        is in `known`, the genome hashes evaluated before, is saved: not simulated again)."""
+
+    def ask(self, state: StrategyState) -> list[Individual]:
+        """The individuals to evaluate next (always the same for one state): the births the
+        row starts with."""
         if self.done(state):
             raise RuntimeError(f"the run has finished its {self.config.generations} generations")
-        if state.current is not None:
-            return list(state.current)
-        rng = generation_rng(state.seed, state.generation)
-        if state.generation == 0 or state.previous is None or state.previous_fitness is None:
-            return self.first(rng)
-        return self.breed(state, rng)
-
-    def first(self, rng: np.random.Generator) -> list[Individual]:
-        """The first individuals: `population` random genomes."""
-        population = self.config.population
-        return [Individual(self.encoding.random(rng), "random") for _ in range(population)]
+        return [birth.individual for birth in self.cohort(state).window]
 
     @abstractmethod
-    def breed(self, state: GAState, rng: np.random.Generator) -> list[Individual]:
-        """The next individuals, from the last told ones (`state.previous`, their fitness
-        `state.previous_fitness`) or the archive, drawing only from `rng`."""
+    def check_state(self, state: StrategyState) -> None:
+        """Raise ValueError (naming the field) for a stored state this strategy cannot go on
+        from (`softevo run --resume` asks before anything runs, once the genomes are checked
+        against the encoding)."""
 
     def tell(
         self,
-        state: GAState,
+        state: StrategyState,
         individuals: list[Individual],
         fitness: np.ndarray | list[float],
         *,
         measures: Records | None = None,
         **counts: int,
-    ) -> tuple[GAState, GenerationStats]:
+    ) -> tuple[StrategyState, GenerationStats]:
         """The state after `individuals` (what `ask(state)` gave) scored `fitness` (NaN =
         failed) and measured `measures`, and the curve row; `counts` (evaluations, saved, ...)
         are stored with the row."""
@@ -164,7 +161,7 @@ class Strategy(ABC):
             )
         if vectors is not None and self.reads_objectives:
             data = {**(data or {}), **self.kept(state, individuals, vectors)}
-        following = GAState(
+        following = StrategyState(
             seed=state.seed,
             generation=state.generation + 1,
             current=None,
@@ -178,14 +175,18 @@ class Strategy(ABC):
         return following, stats
 
     def kept(
-        self, state: GAState, individuals: list[Individual], values: np.ndarray
+        self, state: StrategyState, individuals: list[Individual], values: np.ndarray
     ) -> dict[str, Any]:
-        """What a strategy with `reads_objectives` keeps in `GAState.data` (JSON) of a told
+        """What a strategy with `reads_objectives` keeps in `StrategyState.data` (JSON) of a told
         batch whose maximised objective values are `values` ([N, M]); nothing by default."""
         return {}
 
     def archive(
-        self, state: GAState, individuals: list[Individual], fitness: np.ndarray, records: Records
+        self,
+        state: StrategyState,
+        individuals: list[Individual],
+        fitness: np.ndarray,
+        records: Records,
     ) -> Archive | None:
         """The archive after these individuals (None for a run without descriptors): each
         robot that did not fail is offered to the cell its descriptors (of its body, and of
@@ -225,7 +226,47 @@ class Strategy(ABC):
         }
 
 
-#: The key of `GAState.data` under which a run with objectives keeps its front so far: the
+class Generational(Strategy):
+    """A strategy that breeds whole generations: it implements `breed` (and may override
+    `first`); each row is the P individuals `ask` gives, told at once."""
+
+    def cohort(self, state: StrategyState, known: Container[str] = ()) -> Cohort:
+        return Generation(self, state, known)
+
+    def check_state(self, state: StrategyState) -> None:
+        """Parents index the previous generation."""
+        size = self.config.population
+        for name in ("current", "previous"):
+            for i, item in enumerate(getattr(state, name) or []):
+                if any(parent >= size for parent in item.parents):
+                    raise ValueError(
+                        f"{name}[{i}].parents: {list(item.parents)} indexes past a generation "
+                        f"of {size}"
+                    )
+
+    def ask(self, state: StrategyState) -> list[Individual]:
+        """The generation to evaluate next (always the same for one state)."""
+        if self.done(state):
+            raise RuntimeError(f"the run has finished its {self.config.generations} generations")
+        if state.current is not None:
+            return list(state.current)
+        rng = generation_rng(state.seed, state.generation)
+        if state.generation == 0 or state.previous is None or state.previous_fitness is None:
+            return self.first(rng)
+        return self.breed(state, rng)
+
+    def first(self, rng: np.random.Generator) -> list[Individual]:
+        """The first individuals: `population` random genomes."""
+        population = self.config.population
+        return [Individual(self.encoding.random(rng), "random") for _ in range(population)]
+
+    @abstractmethod
+    def breed(self, state: StrategyState, rng: np.random.Generator) -> list[Individual]:
+        """The next individuals, from the last told ones (`state.previous`, their fitness
+        `state.previous_fitness`) or the archive, drawing only from `rng`."""
+
+
+#: The key of `StrategyState.data` under which a run with objectives keeps its front so far: the
 #: distinct maximised points no evaluated individual dominates (strategies keep other keys).
 FRONT_KEY = "front"
 

@@ -1,15 +1,18 @@
-"""The generation step of a streaming strategy (`steady-state`): births go out as worker slots
-free and are told in birth order, so no core waits at a generation barrier.
+"""The one step of every strategy: births go out as worker slots free and are told in birth
+order, so no core waits at a barrier that the strategy does not have.
 
-`Stepper.step` runs it for a strategy with `streaming`; a step still ends with one curve row
-(every `population` births), but the births in flight at its end stay in flight (`Flights`,
-which outlives the step) and the next step takes their results. Births whose genome an earlier
-birth had are not simulated again. Robots waiting to go out are sent together, up to the
-batch size, whenever a slot frees: small robots share a kernel call and a round trip.
+`Stepper.step` runs it; the strategy gives the row's `Cohort` (`softevo.core.search.cohort`). A
+step ends with one curve row (a generation, or `population` births), but births in flight at its
+end stay in flight (`Flights`, which outlives the step) and the next step takes their results.
+Births whose genome an earlier birth had are not simulated again. Robots waiting to go out are
+sent together, up to the batch size, whenever a slot frees: small robots share a kernel call
+and a round trip. At a step's end the next row's births (a generation bred at once) are handed
+to the hooks, so the commit of this row keeps them.
 """
 
 from __future__ import annotations
 
+import math
 import queue
 import threading
 import time
@@ -20,19 +23,20 @@ from typing import Any, Protocol
 import numpy as np
 
 from softevo.core.evaluator import CHECK_SECONDS, BatchResult, Evaluator, hand_over, names_digest
-from softevo.core.search.state import GAState, Individual
-from softevo.core.search.steady_state import Birth, Nursery, SteadyState
+from softevo.core.search.cohort import Birth, Cohort
+from softevo.core.search.state import Individual, StrategyState
 from softevo.core.search.step import Hooks, Step
 from softevo.core.search.strategy import Strategy
 
 
 class Stepper(Protocol):
-    """What the streaming step reads of the run's `generation.Stepper`."""
+    """What the step reads of the run's `generation.Stepper`."""
 
     @property
     def algorithm(self) -> Strategy: ...
     def robot_file(self, individual: Individual) -> dict[str, Any]: ...
     def flights(self, evaluator: Evaluator, alarm: threading.Event | None) -> Flights: ...
+    def cohort(self, state: StrategyState, known: dict[str, float]) -> Cohort: ...
 
 
 #: What a batch thread hands back: the births it held, its result or what it raised.
@@ -50,6 +54,7 @@ class Flights:
     alarm: threading.Event  # set when a batch lands (the hooks' alarm, which a stop rings too)
     out: set[str] = field(default_factory=set)  # genome hashes sent and not landed
     batches: int = 0  # batches sent and not landed
+    kept: int = -1  # the last birth (number) handed to the hooks
     landings: queue.SimpleQueue[Landing] = field(default_factory=queue.SimpleQueue)
 
     def free(self, waiting: int) -> bool:
@@ -60,6 +65,14 @@ class Flights:
         if self.batches >= min(self.in_flight, 2 * workers):
             return False
         return self.batches < workers or waiting >= self.batch_size
+
+    def portion(self, waiting: int) -> int:
+        """Robots for the next batch: up to a batch, but the `waiting` ones shared evenly among
+        the idle workers (5 on 2: 3 and 2, not 4 and 1), so none idles while another runs a
+        long batch before a barrier (a generation's end)."""
+        idle = max(1, self.evaluator.capacity() - self.batches)
+        count = min(waiting, max(math.ceil(waiting / self.batch_size), idle))
+        return min(self.batch_size, math.ceil(waiting / max(1, count)))
 
     def send(self, births: list[Birth], files: list[dict[str, Any]], key: str) -> None:
         names = [birth.individual.genome.hash for birth in births]
@@ -93,7 +106,8 @@ class _Row:
     """The step's bookkeeping: the births waiting to go out, the alarm that wakes it."""
 
     stepper: Stepper
-    nursery: Nursery
+    cohort: Cohort
+    flights: Flights
     cache: dict[str, float]
     measures: dict[str, dict[str, float]]
     hooks: Hooks
@@ -101,25 +115,33 @@ class _Row:
     waiting: deque[Birth] = field(default_factory=deque)
 
     def keep(self, births: list[Birth]) -> None:
-        """New births: kept by the hooks (which may know their fitness, after a takeover), and
-        queued to go out unless an earlier birth has their genome."""
-        population = self.stepper.algorithm.config.population
-        total = population * self.stepper.algorithm.config.generations
-        births = [birth for birth in births if birth.number < total]  # past the end: never sent
-        for generation, members in _by_row(births, population).items():
-            individuals = {index: births[p].individual for index, p in members.items()}
+        """Births: kept by the hooks unless they were (the hooks may know their fitness, after
+        a takeover), and queued to go out unless an earlier birth has their genome."""
+        generations = self.stepper.algorithm.config.generations
+        births = [birth for birth in births if birth.row < generations]  # past the end: not sent
+        kept, fresh = self.flights.kept, [b for b in births if b.number > self.flights.kept]
+        self.flights.kept = max(kept, fresh[-1].number) if fresh else kept
+        for generation, members in _by_row(fresh).items():
+            individuals = {index: fresh[p].individual for index, p in members.items()}
             known, records = self.hooks.births(generation, individuals)
             for index, value in known.items():
                 genome_hash = individuals[index].genome.hash
                 self.cache.setdefault(genome_hash, value)
                 self.measures.setdefault(genome_hash, records.get(index, {}))
-        self.waiting.extend(birth for birth in births if not birth.saved)
+        # a saved birth waits too if its genome is unknown (a cache cleared since it was
+        # bred): `send` drops it while its twin is known or in flight
+        cache = self.cache
+        self.waiting.extend(
+            b for b in births if not b.saved or b.individual.genome.hash not in cache
+        )
 
-    def send(self, flights: Flights) -> None:
+    def send(self) -> None:
         """Fill free slots with the waiting births (up to a batch each)."""
+        flights = self.flights
         while self.waiting and flights.free(len(self.waiting)):
             births: list[Birth] = []
-            while self.waiting and len(births) < flights.batch_size:
+            size = flights.portion(len(self.waiting))
+            while self.waiting and len(births) < size:
                 birth = self.waiting.popleft()
                 genome_hash = birth.individual.genome.hash
                 if genome_hash not in self.cache and genome_hash not in flights.out:
@@ -130,12 +152,11 @@ class _Row:
 
     def landed(self, births: list[Birth], result: BatchResult) -> None:
         """A batch's results: cached by genome, and handed to the hooks by row."""
-        population = self.stepper.algorithm.config.population
         records = result.records()
         for birth, value, record in zip(births, result.fitness.tolist(), records, strict=True):
             self.cache[birth.individual.genome.hash] = value
             self.measures[birth.individual.genome.hash] = record
-        for generation, members in _by_row(births, population).items():
+        for generation, members in _by_row(births).items():
             positions = list(members.values())
             part = BatchResult(
                 result.fitness[positions],
@@ -148,28 +169,25 @@ class _Row:
 
 def stream_step(
     stepper: Stepper,
-    state: GAState,
+    state: StrategyState,
     cache: dict[str, float],
     evaluator: Evaluator,
     hooks: Hooks,
     key: str,
     measures: dict[str, dict[str, float]],
 ) -> Step:
-    """Tell `population` births of a streaming strategy, in birth order (see the module)."""
+    """Tell one row's births, in birth order (see the module)."""
     started = time.perf_counter()
-    strategy = stepper.algorithm
-    if not isinstance(strategy, SteadyState):
-        raise TypeError(f"{strategy.name} is not told one birth at a time")
-    nursery = strategy.nursery(state, cache)
+    cohort = stepper.cohort(state, cache)
     flights = stepper.flights(evaluator, hooks.alarm)
-    row = _Row(stepper, nursery, cache, measures, hooks, key)
-    row.keep(list(nursery.window))
+    row = _Row(stepper, cohort, flights, cache, measures, hooks, key)
+    row.keep(list(cohort.window))
     try:
-        while not nursery.row_done:
+        while not cohort.row_done:
             _tell_known(row)
-            if nursery.row_done:
+            if cohort.row_done:
                 break
-            row.send(flights)
+            row.send()
             due = hooks.check()
             wait = CHECK_SECONDS if due is None else min(CHECK_SECONDS, due - time.monotonic())
             for births, result, error in flights.take(max(0.0, wait)):
@@ -184,37 +202,40 @@ def stream_step(
             if result is not None:
                 row.landed(births, result)
         raise
-    following, stats = nursery.finish()
-    individuals = [item[0] for item in nursery.row]
-    fitness = np.array([item[1] for item in nursery.row], dtype=np.float64)
-    records = [item[2] for item in nursery.row]
-    evaluated = frozenset(i for i, item in enumerate(nursery.row) if not item[3])
-    return Step(
-        individuals, fitness, records, evaluated, stats, following, time.perf_counter() - started
-    )
+    following, stats = cohort.finish()
+    told = list(cohort.row)  # before the next row goes on (in this cohort, for steady-state)
+    if not stepper.algorithm.done(following):  # the next row's births, kept with this one
+        row.keep(list(stepper.cohort(following, cache).window))
+    fitness = np.array([item[1] for item in told], dtype=np.float64)
+    evaluated = frozenset(i for i, item in enumerate(told) if not item[3])
+    individuals, records = [item[0] for item in told], [item[2] for item in told]
+    seconds = time.perf_counter() - started
+    return Step(individuals, fitness, records, evaluated, stats, following, seconds)
 
 
-def _by_row(births: list[Birth], population: int) -> dict[int, dict[int, int]]:
+def _by_row(births: list[Birth]) -> dict[int, dict[int, int]]:
     """Births by the curve row (generation) they belong to: index in it -> position in `births`."""
     rows: dict[int, dict[int, int]] = {}
     for position, birth in enumerate(births):
-        rows.setdefault(birth.number // population, {})[birth.number % population] = position
+        rows.setdefault(birth.row, {})[birth.index] = position
     return rows
 
 
 def _tell_known(row: _Row) -> None:
-    """Tell every birth, oldest first, whose fitness is known; each breeds the next. The new
+    """Tell every birth, oldest first, whose fitness is known; each may breed another. The new
     births are kept together (one call of the hooks, not one a birth), but before the oldest
     in flight is one of them (a window of 1): the hooks may know its fitness, after a takeover."""
-    nursery, cache = row.nursery, row.cache
+    cohort, cache = row.cohort, row.cache
     bred: list[Birth] = []
-    while not nursery.row_done and nursery.window:
-        if bred and nursery.window[0].number >= bred[0].number:
+    while not cohort.row_done and cohort.window:
+        if bred and cohort.window[0].number >= bred[0].number:
             row.keep(bred)
             bred = []
-        genome_hash = nursery.window[0].individual.genome.hash
+        genome_hash = cohort.window[0].individual.genome.hash
         if genome_hash not in cache:
             break
-        bred.append(nursery.tell(cache[genome_hash], row.measures.get(genome_hash, {}), cache))
+        born = cohort.tell(cache[genome_hash], row.measures.get(genome_hash, {}), cache)
+        if born is not None:
+            bred.append(born)
     if bred:
         row.keep(bred)

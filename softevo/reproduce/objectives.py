@@ -22,7 +22,7 @@ from typing import Any
 from softevo.client import Client
 from softevo.core.search import pareto
 from softevo.core.search.front import front_rows, front_values
-from softevo.core.search.nsga2 import n_survivors
+from softevo.core.search.survivors import n_survivors
 from softevo.core.search.vectors import parse_objectives, reference_point
 from softevo.reproduce.client import wait_runs
 

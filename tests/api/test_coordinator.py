@@ -21,10 +21,10 @@ from softevo.api.coordinator import Coordinator
 from softevo.api.db import Database
 from softevo.api.models import Base, IndividualRow
 from softevo.api.store import front as front_store
-from softevo.core import evaluator as batches
 from softevo.core.config import resolve
 from softevo.core.evaluator import BatchResult
 from softevo.core.physics.evaluation import SerialEvaluator
+from softevo.core.search.stream import Flights
 from tests.reference import front_points, undisturbed
 
 REQUEST = {"preset": "quick", "seed": 5, "population": 8, "generations": 4}
@@ -221,16 +221,18 @@ def count_writes(db: Database) -> list[int]:
 @pytest.mark.parametrize("save_seconds", [60.0, 0.0])
 def test_quick_batches_cost_one_write_per_generation(db: Database, save_seconds: float) -> None:
     """Batches landing within `save_seconds` of the run's last write wait for the generation's
-    commit, which also keeps the next generation: one write transaction a generation. With 0,
-    each batch is saved as it lands. The curve is the same either way."""
+    commit, which also keeps the next generation's births (the first one's go with the run's
+    first write): one write transaction a generation. With 0, each batch is saved as it lands.
+    The curve is the same either way."""
     run = store.create_run(db, resolve(REQUEST))
     evaluator = Counting()
     writes = count_writes(db)
     options = {"batch_size": 2, "save_seconds": save_seconds, "lease_seconds": 120.0}
     assert drive(db, run.id, evaluator, **options) == "completed"
     generations = REQUEST["generations"]
-    # taking the run, keeping generation 0, one commit a generation, and the stop's release
-    expected = 1 + 1 + generations + 1 + (evaluator.batches if save_seconds == 0 else 0)
+    # taking the run, one commit a generation, and the stop's release; with 0, also each batch
+    # and the first generation's births, written at once
+    expected = 1 + generations + 1 + (1 + evaluator.batches if save_seconds == 0 else 0)
     assert writes[0] == expected, (writes[0], evaluator.batches)
     assert evaluator.batches > generations  # several batches a generation were coalesced
     assert store.curve(db, run.id) == undisturbed(REQUEST).curve()
@@ -241,13 +243,13 @@ def test_fitness_waiting_for_its_write_is_saved_at_a_shutdown(
 ) -> None:
     """Three batches of generation 0 land and wait (a minute's `save_seconds`), the fourth hangs;
     a clean shutdown saves the three, and the successor evaluates only the rest."""
-    landings, put = threading.Semaphore(0), batches._Landings.put
+    landings, evaluate = threading.Semaphore(0), Flights._evaluate
 
-    def put_and_count(self: batches._Landings, landing: batches.Landing) -> None:
-        put(self, landing)
+    def evaluate_and_count(self: Flights, births: Any, files: Any, key: str) -> None:
+        evaluate(self, births, files, key)
         landings.release()
 
-    monkeypatch.setattr(batches._Landings, "put", put_and_count)
+    monkeypatch.setattr(Flights, "_evaluate", evaluate_and_count)
     run = store.create_run(db, resolve(REQUEST))
     frozen = FreezingEvaluator(calls=3)
     first = Coordinator(db, frozen, batch_size=2, save_seconds=60.0, poll_seconds=0.05)

@@ -87,6 +87,9 @@ def test_a_budget_in_simulations_ends_the_run_and_is_shown_back(client: TestClie
     assert run["status"] == "completed", run
     assert run["config"]["max_simulations"] == run["progress"]["max_simulations"] == 10
     assert 10 <= run["progress"]["evaluations"] < 14 and run["progress"]["generation"] < 50
+    rows = len(client.get(f"/runs/{run['id']}/curve").json()["generations"])
+    after = client.get(f"/runs/{run['id']}/individuals", params={"generation": rows}).json()
+    assert after["total"] == 0, after  # the next row's births, bred, are not kept by the end
     response = client.post("/runs", json={**QUICK, "max_simulations": 0})
     assert response.status_code == 422, response.text
     detail = response.json()["detail"]

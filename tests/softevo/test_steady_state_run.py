@@ -93,9 +93,9 @@ def _renumbered(window: list[dict]) -> None:
     [
         (
             _renumbered,
-            "data.steady.window[2]: expected birth 10 with saved true or false, got dict",
+            "data.steady.window[2]: expected birth 10 with saved true or false, got birth 99",
         ),
-        (list.pop, "data.steady.window: expected a list of 5 births (the window), got list"),
+        (list.pop, "data.steady.window: expected a list of 5 births (the window), got 4"),
     ],
 )
 def test_a_tampered_window_is_refused_in_one_line(

@@ -147,8 +147,9 @@ class Service:
 
     def batch_individuals(self, run_id: int, job: Job) -> list[dict[str, Any]]:
         """The individuals evaluated in a job's batch (matched by robot file)."""
-        batch_key, files = job.args
-        generation = int(batch_key.split("-gen")[1].split("-")[0])
+        batch_key, files = job.args  # run{id}-b{first birth}-{digest}
+        first = int(batch_key.split("-b")[1].split("-")[0])
+        generation = first // self.run(run_id)["config"]["population"]
         found = []
         for item in self.individuals(run_id, generation=generation):
             if item["status"] not in ("evaluated", "failed"):

@@ -14,7 +14,7 @@ from softevo.api import store
 from softevo.api.db import Database
 from softevo.api.store.driving import GenerationCommit
 from tests.api.store.test_measures_store import downgrade
-from tests.api.store.test_store import OWNER, STATS, driven, members
+from tests.api.store.test_store import OWNER, STATS, driven, keep, members
 
 ARCHIVE = {
     "descriptors": ["voxels"],
@@ -41,9 +41,13 @@ def stored_state(db: Database, run_id: int) -> dict:
 def test_a_commit_writes_the_archive_apart_and_load_puts_it_back(db: Database) -> None:
     run_id = driven(db)
     assert store.archive(db, run_id) is None  # before the first commit
-    store.driving.keep_generation(db, run_id, OWNER, 0, members())
+    keep(db, run_id, 0, members())
     commit = GenerationCommit(
-        STATS, {"seed": 1}, archive=ARCHIVE, best=(0.25, 0), upcoming=members("n")
+        STATS,
+        {"seed": 1},
+        archive=ARCHIVE,
+        best=(0.25, 0),
+        members=[(1, i, m) for i, m in enumerate(members("n"))],
     )
     store.driving.commit_generation(db, run_id, OWNER, commit)
     assert store.archive(db, run_id) == ARCHIVE
@@ -53,7 +57,7 @@ def test_a_commit_writes_the_archive_apart_and_load_puts_it_back(db: Database) -
 
 def test_an_archive_inside_the_state_moves_to_its_column_and_back(db: Database) -> None:
     run_id = driven(db)
-    store.driving.keep_generation(db, run_id, OWNER, 0, members())
+    keep(db, run_id, 0, members())
     kept = store.progress_counts(db, run_id)
     downgrade(db, "0004")  # the release before: the archive inside the GA state
     with db.engine.begin() as connection:

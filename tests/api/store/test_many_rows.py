@@ -17,7 +17,7 @@ from softevo.api.db import Database
 from softevo.api.models import IndividualRow
 from softevo.api.store.driving import _INSERT_MEMBER, MEMBER_COLUMNS
 from softevo.api.store.fitness_rows import Landed
-from tests.api.store.test_store import OWNER, driven
+from tests.api.store.test_store import OWNER, driven, keep
 
 AWKWARD = ["a,b", 'q"uote', "{brace}", "back\\slash", "NULL", "", "ünï ☃", "sp ace"]
 
@@ -73,7 +73,7 @@ def test_many_rows_store_what_one_row_at_a_time_stores(db: Database) -> None:
             row = {"b_run": one_by_one, "b_generation": 0, "b_index": index}
             row |= {f"b_{column}": member[column] for column in MEMBER_COLUMNS}
             _INSERT_MEMBER.execute(connection, [row])
-    store.driving.keep_generation(db, at_once, OWNER, 0, awkward_members())
+    keep(db, at_once, 0, awkward_members())
     for batch in landed:
         for index, value in batch.fitness.items():
             single = Landed({index: value}, batch.worker, batch.seconds_each, batch.measures)
@@ -104,7 +104,7 @@ def test_a_seconds_figure_that_is_not_finite_is_stored_as_null(db: Database) -> 
     """NaN is null in every column (`softevo.core.nulls`): a worker's odd timing neither fails
     the write (PostgreSQL's rows go as JSON, which has no NaN) nor is stored as a number."""
     run_id = driven(db)
-    store.driving.keep_generation(db, run_id, OWNER, 0, awkward_members())
+    keep(db, run_id, 0, awkward_members())
     store.driving.save_fitness(db, run_id, OWNER, 0, [Landed({0: 0.5, 1: 0.25}, "w", math.nan)])
     rows = stored(db, run_id)
     assert [row[5:9] for row in rows[:2]] == [

@@ -23,8 +23,8 @@ from softevo.core.config import resolve
 from softevo.core.evaluator import BatchResult
 from softevo.core.nulls import Record, from_null_record
 from softevo.core.physics.evaluation import SerialEvaluator
-from softevo.core.search.algorithm import GAState
-from tests.api.store.test_store import OWNER, STATS, driven, members
+from softevo.core.search.configured import StrategyState
+from tests.api.store.test_store import OWNER, STATS, driven, keep, members
 from tests.api.test_coordinator import wait_status
 from tests.reference import undisturbed
 
@@ -42,12 +42,12 @@ def same(found: dict[str, float], expected: dict[str, float]) -> bool:
 
 def test_a_record_is_written_with_its_fitness_and_read_back_to_the_bit(db: Database) -> None:
     run_id = driven(db)
-    store.driving.keep_generation(db, run_id, OWNER, 0, members())
+    keep(db, run_id, 0, members())
     landed = [Landed({0: 0.5, 1: math.nan}, "w1", 0.1, {0: RECORD, 1: {"stable": 0.0}})]
     store.driving.save_fitness(db, run_id, OWNER, 0, landed)
-    fitness, measures = store.driving.keep_generation(db, run_id, OWNER, 0, members())  # successor
-    assert fitness[0] == 0.5 and math.isnan(fitness[1]) and set(fitness) == set(measures) == {0, 1}
-    assert same(measures[0], RECORD) and measures[1] == {"stable": 0.0}
+    found = store.births.stored_births(db, run_id, 0)  # what a successor reads back
+    assert found[(0, 0)][1] == 0.5 and math.isnan(found[(0, 1)][1]) and found[(0, 2)][1] is None
+    assert same(found[(0, 0)][2], RECORD) and found[(0, 1)][2] == {"stable": 0.0}
     store.driving.commit_generation(
         db,
         run_id,
@@ -59,7 +59,7 @@ def test_a_record_is_written_with_its_fitness_and_read_back_to_the_bit(db: Datab
             cached_measures={3: RECORD},
             landed=[Landed({2: 0.25}, "w2", 0.1)],
             best=(0.5, 0),
-            upcoming=members("n"),
+            members=[(1, i, m) for i, m in enumerate(members("n"))],
         ),
     )
     fitness, measures = store.driving.known_fitness(db, run_id, 1)
@@ -226,7 +226,7 @@ def test_a_run_stored_at_revision_0003_is_taken_over_with_the_undisturbed_curve(
             second.stop()
         reference = undisturbed(QD_REQUEST)
         assert store.curve(db, run.id) == reference.curve()
-        state = GAState.from_json(store.driving.load(db, run.id)[1])
+        state = StrategyState.from_json(store.driving.load(db, run.id)[1])
         assert state.archive is not None and reference.state.archive is not None
         assert state.archive.to_json() == reference.state.archive.to_json()
     finally:

@@ -16,7 +16,7 @@ from softevo.api.store.folders import history
 from softevo.core.config import RunConfig, resolve
 from softevo.core.objectives import MEASURES
 from tests.api.store.test_measures_store import downgrade
-from tests.api.store.test_store import OWNER, REQUEST, STATS, driven, members
+from tests.api.store.test_store import OWNER, REQUEST, STATS, driven, keep, members
 
 PARETO = {"hypervolume": 37.5, "front_size": 3, "normalised_hypervolume": 0.7933884297520661}
 
@@ -24,8 +24,10 @@ PARETO = {"hypervolume": 37.5, "front_size": 3, "normalised_hypervolume": 0.7933
 def committed(db: Database, stats: dict) -> int:
     """A run whose generation 0 was committed with `stats`."""
     run_id = driven(db)
-    store.driving.keep_generation(db, run_id, OWNER, 0, members())
-    commit = GenerationCommit(stats, {"seed": 1}, best=(0.5, 0), upcoming=members("n"))
+    keep(db, run_id, 0, members())
+    commit = GenerationCommit(
+        stats, {"seed": 1}, best=(0.5, 0), members=[(1, i, m) for i, m in enumerate(members("n"))]
+    )
     store.driving.commit_generation(db, run_id, OWNER, commit)
     return run_id
 

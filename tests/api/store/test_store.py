@@ -1,7 +1,7 @@
 """The store's contract, one suite on SQLite and on PostgreSQL (the `db` fixture runs both): runs
-queue and cancel only while active; a generation is kept once and a different one refused; a
-fitness is written once per individual; a commit is all or nothing; and a coordinator that lost
-its lease can write nothing."""
+queue and cancel only while active; births are kept with a write and read back by a successor;
+a fitness is written once per individual; a commit is all or nothing; and a coordinator that
+lost its lease can write nothing."""
 
 from __future__ import annotations
 
@@ -16,7 +16,6 @@ from softevo.api.db import Database
 from softevo.api.models import GenerationRow, IndividualRow
 from softevo.api.store.driving import (
     GenerationCommit,
-    GenerationMismatchError,
     Landed,
     Lease,
     LeaseLostError,
@@ -40,6 +39,14 @@ def members(tag: str = "x") -> list[dict]:
     ]
 
 
+def keep(
+    db: Database, run_id: int, generation: int, kept: list[dict], lease: Lease = OWNER
+) -> None:
+    """Births asked and written with a save, as a driver writes them."""
+    births = [(generation, index, member) for index, member in enumerate(kept)]
+    store.driving.save_fitness(db, run_id, lease, generation, [], births)
+
+
 def driven(db: Database) -> int:
     run = store.create_run(db, resolve(REQUEST))
     assert store.leases.acquire(db, run.id, OWNER.owner, OWNER.seconds)
@@ -56,18 +63,20 @@ def statuses(db: Database, run_id: int) -> dict[int, tuple[str, float | None]]:
         return {index: (status, fitness) for index, status, fitness in rows}
 
 
-def test_a_generation_is_kept_once_and_a_different_one_refused(db: Database) -> None:
+def test_births_are_kept_once_and_read_back_by_a_successor(db: Database) -> None:
     run_id = driven(db)
-    assert store.driving.keep_generation(db, run_id, OWNER, 0, members()) == ({}, {})
-    assert store.driving.keep_generation(db, run_id, OWNER, 0, members()) == ({}, {})  # again: same
+    keep(db, run_id, 0, members())
     assert len(statuses(db, run_id)) == 4
-    with pytest.raises(GenerationMismatchError, match="differs"):
-        store.driving.keep_generation(db, run_id, OWNER, 0, members("y"))
+    with pytest.raises(IntegrityError):  # the same births twice
+        keep(db, run_id, 0, members())
+    stored = store.births.stored_births(db, run_id, 0)
+    assert stored == {(0, i): (f"x{i}", None, {}) for i in range(4)}
+    assert store.births.stored_births(db, run_id, 1) == {}
 
 
 def test_a_fitness_is_written_once_and_nan_is_failed_not_zero(db: Database) -> None:
     run_id = driven(db)
-    store.driving.keep_generation(db, run_id, OWNER, 0, members())
+    keep(db, run_id, 0, members())
     store.driving.save_fitness(db, run_id, OWNER, 0, [Landed({0: 0.5, 1: math.nan}, "w1", 0.1)])
     late_twin = Landed({0: 9.0}, "w2", 0.1)
     store.driving.save_fitness(db, run_id, OWNER, 0, [late_twin, Landed({2: 0.25}, "w3", 0.2)])
@@ -77,9 +86,9 @@ def test_a_fitness_is_written_once_and_nan_is_failed_not_zero(db: Database) -> N
         2: (IndividualStatus.EVALUATED, 0.25),
         3: (IndividualStatus.PENDING, None),
     }
-    # what a successor reads back: fitness saved, NaN for the failed one
-    known, _ = store.driving.keep_generation(db, run_id, OWNER, 0, members())
-    assert known[0] == 0.5 and math.isnan(known[1]) and set(known) == {0, 1, 2}
+    # what a successor reads back: fitness saved, NaN for the failed one, None: pending
+    known = {key[1]: found[1] for key, found in store.births.stored_births(db, run_id, 0).items()}
+    assert known[0] == 0.5 and math.isnan(known[1]) and known[2] == 0.25 and known[3] is None
 
 
 STATS = {
@@ -111,7 +120,7 @@ def commit(db: Database, run_id: int, lease: Lease, done: bool, **parts: object)
 
 def test_a_commit_writes_the_generation_counters_and_cached_fitness(db: Database) -> None:
     run_id = driven(db)
-    store.driving.keep_generation(db, run_id, OWNER, 0, members())
+    keep(db, run_id, 0, members())
     commit(db, run_id, OWNER, done=True)
     record = store.get_run(db, run_id)
     assert record.status == RunStatus.COMPLETED and record.generations_done == 1
@@ -121,13 +130,14 @@ def test_a_commit_writes_the_generation_counters_and_cached_fitness(db: Database
 
 
 def test_a_commit_writes_what_landed_and_keeps_the_next_generation(db: Database) -> None:
-    """Batches' fitness not saved yet lands with the commit, and the next generation's members
-    are kept by it: keeping them again (a successor) finds them, nothing evaluated."""
+    """Batches' fitness not saved yet lands with the commit, and the next generation's births
+    are kept by it: a successor finds them, nothing evaluated."""
     run_id = driven(db)
-    store.driving.keep_generation(db, run_id, OWNER, 0, members())
+    keep(db, run_id, 0, members())
     store.driving.save_fitness(db, run_id, OWNER, 0, [Landed({0: 0.5}, "w1", 0.1)])
     landed = [Landed({1: math.nan}, "w1", 0.1), Landed({2: 0.25}, "w2", 0.3)]
-    commit(db, run_id, OWNER, done=False, landed=landed, upcoming=members("n"))
+    upcoming = [(1, index, member) for index, member in enumerate(members("n"))]
+    commit(db, run_id, OWNER, done=False, landed=landed, members=upcoming)
     columns = (
         IndividualRow.genome_hash,
         IndividualRow.status,
@@ -149,24 +159,14 @@ def test_a_commit_writes_what_landed_and_keeps_the_next_generation(db: Database)
     assert [tuple(row) for row in rows[4:]] == [
         (f"n{i}", IndividualStatus.PENDING, None, None) for i in range(4)
     ]
-    assert store.driving.keep_generation(db, run_id, OWNER, 1, members("n")) == ({}, {})
-    with pytest.raises(GenerationMismatchError):
-        store.driving.keep_generation(db, run_id, OWNER, 1, members("m"))
+    stored = store.births.stored_births(db, run_id, 1)
+    assert stored == {(1, i): (f"n{i}", None, {}) for i in range(4)}
     assert store.get_run(db, run_id).generations_done == 1
-
-
-def test_the_last_commit_keeps_no_next_generation(db: Database) -> None:
-    run_id = driven(db)
-    store.driving.keep_generation(db, run_id, OWNER, 0, members())
-    commit(db, run_id, OWNER, done=True, upcoming=members("n"))
-    assert store.get_run(db, run_id).status == RunStatus.COMPLETED
-    with db.read_session() as session:
-        assert session.scalar(select(func.max(IndividualRow.generation))) == 0
 
 
 def test_a_commit_is_all_or_nothing(db: Database) -> None:
     run_id = driven(db)
-    store.driving.keep_generation(db, run_id, OWNER, 0, members())
+    keep(db, run_id, 0, members())
     commit(db, run_id, OWNER, done=False)
     with pytest.raises(IntegrityError):  # the same generation twice
         commit(db, run_id, OWNER, done=True)
@@ -178,12 +178,12 @@ def test_a_commit_is_all_or_nothing(db: Database) -> None:
 
 def test_a_coordinator_that_lost_its_lease_writes_nothing(db: Database) -> None:
     run_id = driven(db)
-    store.driving.keep_generation(db, run_id, OWNER, 0, members())
+    keep(db, run_id, 0, members())
     store.leases.release_all(db, OWNER.owner)
     successor = Lease("owner-b", 30.0)
     assert store.leases.acquire(db, run_id, successor.owner, successor.seconds)
     for write in (
-        lambda: store.driving.keep_generation(db, run_id, OWNER, 1, members("z")),
+        lambda: keep(db, run_id, 1, members("z")),
         lambda: store.driving.save_fitness(db, run_id, OWNER, 0, [Landed({0: 1.0}, "old", 0.1)]),
         lambda: commit(db, run_id, OWNER, done=True),
     ):
@@ -199,7 +199,7 @@ def test_cancel_changes_only_an_active_run(db: Database) -> None:
     with pytest.raises(store.ConflictError, match="is cancelled"):
         store.cancel_run(db, queued.id)
     run_id = driven(db)
-    store.driving.keep_generation(db, run_id, OWNER, 0, members())
+    keep(db, run_id, 0, members())
     commit(db, run_id, OWNER, done=True)
     with pytest.raises(store.ConflictError, match="is completed"):
         store.cancel_run(db, run_id)

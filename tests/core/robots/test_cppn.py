@@ -24,7 +24,7 @@ from softevo.core.robots.encodings import EncodingError
 from softevo.core.robots.genome import Genome
 from softevo.core.robots.robot_file import parse_robot, robot_to_json
 from softevo.core.robots.settings import SimSettings
-from softevo.core.search.algorithm import GAConfig
+from softevo.core.search.configured import StrategySettings
 from softevo.core.search.state import Individual
 from softevo.core.search.variation import mate, mutant
 
@@ -115,7 +115,7 @@ def test_crossover_aligns_connections_by_innovation() -> None:
 
 
 def test_mate_and_mutant_draw_only_from_the_generator() -> None:
-    config = GAConfig(mutation_probability=0.5, mutation_genes=2)
+    config = StrategySettings(mutation_probability=0.5, mutation_genes=2)
     encoding = CppnEncoding((3, 3, 3))
     pair = tuple(Individual(g, "random") for g in _genomes(2))
     runs = [mate(config, encoding, pair, (0, 1), np.random.default_rng(9)) for _ in range(2)]

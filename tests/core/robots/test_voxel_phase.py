@@ -19,7 +19,7 @@ from softevo.core.robots.encodings import VoxelPhaseEncoding
 from softevo.core.robots.robot import Actuation, VoxelRobot, build_mechanics
 from softevo.core.robots.robot_file import RobotFileError, load_robot, parse_robot, robot_to_json
 from softevo.core.robots.settings import SimSettings
-from softevo.core.search.algorithm import GAConfig, Individual
+from softevo.core.search.configured import Individual, StrategySettings
 from softevo.core.search.variation import mate
 
 EXAMPLES = sorted((Path(__file__).resolve().parents[3] / "examples").glob("*.json"))
@@ -95,7 +95,7 @@ def test_crossover_carries_a_voxels_phase_and_amplitude_with_its_label() -> None
     n = 8
     first = encoding.genome(np.zeros(n, dtype=int), np.array([0.1, 0.2, *[0.3] * n, *[-1.0] * n]))
     second = encoding.genome(np.full(n, 3), np.array([-0.1, -0.2, *[-0.4] * n, *[2.0] * n]))
-    config = GAConfig(crossover_probability=1.0, mutation_probability=0.0)
+    config = StrategySettings(crossover_probability=1.0, mutation_probability=0.0)
     rng = np.random.default_rng(1)
     swapped = 0
     for _ in range(50):

@@ -11,7 +11,7 @@ import pytest
 
 from softevo.core.config import resolve
 from softevo.core.robots.encoding_registry import make_encoding
-from softevo.core.search.algorithm import GAConfig, GAState, Strategy, make_strategy
+from softevo.core.search.configured import Strategy, StrategySettings, StrategyState, make_strategy
 from softevo.core.search.stats import GenerationStats
 
 
@@ -23,7 +23,7 @@ def toy_fitness(individuals: list) -> np.ndarray:
 class Held:
     """The pure algorithm with its state held here, as a driver holds it."""
 
-    def __init__(self, algorithm: Strategy, state: GAState) -> None:
+    def __init__(self, algorithm: Strategy, state: StrategyState) -> None:
         self.algorithm, self.state = algorithm, state
         self.config, self.encoding = algorithm.config, algorithm.encoding
 
@@ -40,7 +40,7 @@ class Held:
 
 
 def make(seed: int = 1, **changes: object) -> Held:
-    config = GAConfig.model_validate({"population": 12, "generations": 15, **changes})
+    config = StrategySettings.model_validate({"population": 12, "generations": 15, **changes})
     algorithm = make_strategy(config, make_encoding("voxel", (3, 3, 2)))
     return Held(algorithm, algorithm.start(seed))
 
@@ -93,7 +93,7 @@ def test_generation_can_be_regenerated_from_seed_and_previous_population() -> No
     upcoming = algorithm.ask()
     # A fresh algorithm given only the stored generation g-1 and its fitness breeds the same g.
     state = algorithm.state
-    rebuilt = GAState(
+    rebuilt = StrategyState(
         seed=7,
         generation=state.generation,
         previous=state.previous,
@@ -111,7 +111,7 @@ def test_state_round_trips_through_json_and_resumes_identically() -> None:
     for _ in range(6):
         interrupted.tell(toy_fitness(interrupted.ask()))
     text = json.dumps(interrupted.state.to_json(), allow_nan=False)
-    resumed = Held(interrupted.algorithm, GAState.from_json(json.loads(text)))
+    resumed = Held(interrupted.algorithm, StrategyState.from_json(json.loads(text)))
     run(resumed)
     assert resumed.state.to_json() == whole.state.to_json()
 

@@ -1,4 +1,4 @@
-"""The baselines of `GAConfig.algorithm`: random search and a (1+lambda) hill climber."""
+"""The baselines of `StrategySettings.algorithm`: random search and a (1+lambda) hill climber."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from softevo.core.config import ConfigError, resolve
-from softevo.core.search.algorithm import GAState
+from softevo.core.search.configured import StrategyState
 from tests.core.search.test_algorithm import Held, make, run, toy_fitness
 
 
@@ -56,7 +56,7 @@ def test_a_baseline_resumes_from_its_json_state() -> None:
     part = make(algorithm="hillclimb")
     for _ in range(5):
         part.tell(toy_fitness(part.ask()))
-    state = GAState.from_json(json.loads(json.dumps(part.state.to_json())))
+    state = StrategyState.from_json(json.loads(json.dumps(part.state.to_json())))
     resumed = Held(part.algorithm, state)
     assert run(resumed) == expected
 

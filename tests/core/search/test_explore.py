@@ -11,13 +11,13 @@ from softevo.core.evolution import Evolution
 from softevo.core.physics.evaluation import SerialEvaluator
 from softevo.core.robots.encoding_registry import make_encoding
 from softevo.core.search import operators, pareto
-from softevo.core.search.algorithm import GAConfig
+from softevo.core.search.configured import StrategySettings
 from softevo.core.search.state import Individual
 from softevo.core.search.variation import explore_children, explore_mutants, gene_rate
 from tests.core.search.test_nsga2_afpo import Run
 
 ENCODING = make_encoding("voxel", (3, 3, 2))
-CONFIG = GAConfig.model_validate({"algorithm": "nsga2"})
+CONFIG = StrategySettings.model_validate({"algorithm": "nsga2"})
 
 
 def population(n: int, seed: int) -> list[Individual]:

@@ -16,7 +16,7 @@ from softevo.core.robots.genome import Genome
 from softevo.core.robots.lattice import largest_component
 from softevo.core.search.archive import Archive
 from softevo.core.search.descriptors import describe, largest_group
-from softevo.core.search.state import GAState
+from softevo.core.search.state import StrategyState
 
 QD = {
     "preset": "quick",
@@ -111,7 +111,7 @@ def test_a_run_resumed_from_its_json_state_ends_with_the_same_archive() -> None:
     with SerialEvaluator() as evaluator:
         for _ in range(2):
             half.step(evaluator)
-        half.state = GAState.from_json(json.loads(json.dumps(half.state.to_json())))
+        half.state = StrategyState.from_json(json.loads(json.dumps(half.state.to_json())))
         half.cache.clear()  # a takeover rebuilds its cache; the fitness is the same
         half.run(evaluator)
     assert half.state.archive.to_json() == whole.state.archive.to_json()

@@ -13,11 +13,11 @@ from softevo import library
 from softevo.core.config import ConfigError, resolve
 from softevo.core.robots.encodings import Variation, VoxelEncoding
 from softevo.core.robots.genome import Genome
-from softevo.core.search.algorithm import describe_strategies, make_strategy
 from softevo.core.search.archive import Archive
+from softevo.core.search.configured import describe_strategies, make_strategy
 from softevo.core.search.map_elites import spread_random
 from softevo.core.search.operators import iso_line, mutate_each
-from softevo.core.search.state import GAState, Individual
+from softevo.core.search.state import Individual, StrategyState
 
 ALPHABET = np.array([5] * 40 + [1] * 4 + [2] * 6)
 BOUNDS = np.array([[-1.0, 1.0], [-2.0, 2.0], [0.0, 10.0]])
@@ -110,7 +110,7 @@ def test_default_options_breed_as_map_elites_did_before_they_existed() -> None:
     assert default.ask(state) == explicit.ask(state)
 
 
-def elites_state(options: dict) -> tuple[object, GAState]:
+def elites_state(options: dict) -> tuple[object, StrategyState]:
     """A map-elites strategy on 3x3x2 and a state whose archive holds 5 random elites."""
     config = resolve({**PINNED_RUN, "shape": [3, 3, 2], "options": options})
     encoding = VoxelEncoding((3, 3, 2))
@@ -119,10 +119,10 @@ def elites_state(options: dict) -> tuple[object, GAState]:
     for i in range(5):
         archive.add((i / 5, i / 5), float(i), 0, i, encoding.random(rng))
     previous = [Individual(encoding.random(rng), "random") for _ in range(6)]
-    state = GAState(
+    state = StrategyState(
         seed=4, generation=1, previous=previous, previous_fitness=[0.0] * 6, archive=archive
     )
-    return make_strategy(config.ga_config(), encoding), state
+    return make_strategy(config.strategy_settings(), encoding), state
 
 
 @pytest.mark.parametrize("real", ["gaussian", "iso-line"])

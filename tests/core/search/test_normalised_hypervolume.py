@@ -12,7 +12,7 @@ import pytest
 
 from softevo.core.robots.encoding_registry import make_encoding
 from softevo.core.search import pareto
-from softevo.core.search.algorithm import GAConfig, make_strategy
+from softevo.core.search.configured import StrategySettings, make_strategy
 from softevo.core.search.stats import GenerationStats, curve_columns
 
 OBJECTIVES = [
@@ -29,7 +29,7 @@ RECORDS = [
 
 def told(records: list[dict[str, float]]) -> GenerationStats:
     """The curve row of one generation of random search told `records` (fitness = speed)."""
-    config = GAConfig.model_validate(
+    config = StrategySettings.model_validate(
         {
             "algorithm": "random",
             "population": len(records),

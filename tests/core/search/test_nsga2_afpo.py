@@ -12,7 +12,7 @@ import pytest
 
 from softevo.core.robots.encoding_registry import make_encoding
 from softevo.core.search import pareto
-from softevo.core.search.algorithm import GAConfig, GAState, make_strategy
+from softevo.core.search.configured import StrategySettings, StrategyState, make_strategy
 from softevo.core.search.state import Individual
 from softevo.core.search.vectors import ideal_point, objective_values, reference_point
 
@@ -37,7 +37,7 @@ class Run:
     """A strategy with its state held here, told toy measures (fitness = speed)."""
 
     def __init__(self, seed: int = 1, **changes: object) -> None:
-        config = GAConfig.model_validate(
+        config = StrategySettings.model_validate(
             {"population": 12, "generations": 10, "objectives": OBJECTIVES, **changes}
         )
         self.strategy = make_strategy(config, make_encoding("voxel", (3, 3, 2)))
@@ -66,7 +66,7 @@ def test_same_seed_same_run_and_resumed_from_json_the_same(algorithm: str) -> No
     part = Run(1, algorithm=algorithm)
     for _ in range(4):
         part.step()
-    part.state = GAState.from_json(json.loads(part.state.to_text()))
+    part.state = StrategyState.from_json(json.loads(part.state.to_text()))
     assert part.finish() == curve
     assert part.state.to_json() == whole.state.to_json()
 
@@ -100,14 +100,14 @@ def test_runs_without_objectives_keep_their_columns() -> None:
 
 def held(strategy_name: str, population: int, values: list[list[float]], **data: list) -> tuple:
     """A strategy and a state as if `values` (maximised, NaN failed) had just been told."""
-    config = GAConfig.model_validate(
+    config = StrategySettings.model_validate(
         {"algorithm": strategy_name, "population": population, "generations": 5}
     )
     strategy = make_strategy(config, make_encoding("voxel", (2, 2, 2)))
     rng = np.random.default_rng(0)
     previous = [Individual(strategy.encoding.random(rng), "random") for _ in values]
     born = data.pop("born", [[0, i] for i in range(len(values))])
-    state = GAState(
+    state = StrategyState(
         seed=0,
         generation=3,
         previous=previous,
@@ -153,7 +153,7 @@ def test_afpo_keeps_the_young_beside_the_fit_and_adds_one_newcomer() -> None:
 
 def test_afpo_needs_room_for_a_child_and_a_newcomer() -> None:
     with pytest.raises(ValueError, match="population: afpo needs at least 3"):
-        GAConfig.model_validate({"algorithm": "afpo", "population": 2})
+        StrategySettings.model_validate({"algorithm": "afpo", "population": 2})
 
 
 def test_a_state_without_the_strategy_data_is_refused_in_one_line() -> None:
@@ -177,13 +177,13 @@ def test_a_weighted_ga_selects_on_the_weighted_sum_and_keeps_speed_as_fitness() 
     part = Run(4, algorithm="ga", options={"weights": [1.0, 5.0]})
     for _ in range(3):
         part.step()
-    part.state = GAState.from_json(json.loads(part.state.to_text()))
+    part.state = StrategyState.from_json(json.loads(part.state.to_text()))
     assert part.finish() == curve
 
 
 def test_a_weighted_ga_keeps_the_best_sum_not_the_fastest() -> None:
     nan = math.nan
-    config = GAConfig.model_validate(
+    config = StrategySettings.model_validate(
         {
             "population": 4,
             "generations": 5,
@@ -195,7 +195,7 @@ def test_a_weighted_ga_keeps_the_best_sum_not_the_fastest() -> None:
     strategy = make_strategy(config, make_encoding("voxel", (2, 2, 2)))
     rng = np.random.default_rng(0)
     previous = [Individual(strategy.encoding.random(rng), "random") for _ in range(4)]
-    state = GAState(
+    state = StrategyState(
         seed=0,
         generation=2,
         previous=previous,
@@ -220,4 +220,4 @@ def test_a_weighted_ga_keeps_the_best_sum_not_the_fastest() -> None:
 )
 def test_bad_weights_are_named(options: dict, objectives: list, words: str) -> None:
     with pytest.raises(ValueError, match=re.escape(words)):
-        GAConfig.model_validate({"objectives": objectives, "options": options})
+        StrategySettings.model_validate({"objectives": objectives, "options": options})

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from softevo.core.config import resolve
-from softevo.core.search.algorithm import make_strategy
-from softevo.core.search.state import GAState
+from softevo.core.search.configured import make_strategy
+from softevo.core.search.state import StrategyState
 
 CASES = [
     {"preset": "paper-voxel", "shape": [3, 3, 3]},
@@ -30,7 +30,7 @@ CASES = [
 @pytest.mark.parametrize("request_", CASES, ids=lambda case: "-".join(map(str, case.values())))
 def test_the_state_text_parses_to_its_json(request_: dict) -> None:
     config = resolve({**request_, "seed": 5})
-    algorithm = make_strategy(config.ga_config(), config.make_encoding())
+    algorithm = make_strategy(config.strategy_settings(), config.make_encoding())
     state = algorithm.start(5)
     rng = np.random.default_rng(0)
     checked = 0
@@ -38,7 +38,9 @@ def test_the_state_text_parses_to_its_json(request_: dict) -> None:
         for history in (True, False):
             text = state.to_text(history)
             assert json.loads(text) == json.loads(json.dumps(state.to_json(history)))
-            assert GAState.from_json(json.loads(text)).to_json(history) == state.to_json(history)
+            assert StrategyState.from_json(json.loads(text)).to_json(history) == state.to_json(
+                history
+            )
             checked += 1
         individuals = algorithm.ask(state)
         fitness = rng.random(len(individuals))

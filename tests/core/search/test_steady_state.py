@@ -17,7 +17,7 @@ from softevo.core.config import ConfigError, resolve
 from softevo.core.evaluator import BatchResult, Evaluator
 from softevo.core.evolution import Evolution
 from softevo.core.physics.evaluation import PoolEvaluator, SerialEvaluator
-from softevo.core.search.state import GAState
+from softevo.core.search.state import StrategyState
 from softevo.core.search.steady_state import KEY
 
 REQUEST = {
@@ -96,7 +96,7 @@ def test_a_stop_and_resume_from_the_stored_state_goes_on_to_the_same_run(window:
     for _ in range(2):
         first.step(evaluator)  # births of row 2 are still in flight when it stops
     assert len(first.state.data[KEY]["window"]) == window
-    state = GAState.from_json(first.state.to_json())
+    state = StrategyState.from_json(first.state.to_json())
     resumed = Evolution.resume(resolve(request), state, first.cache, measures=first.measures)
     resumed.run(SerialEvaluator())
     assert resumed.curve() == whole.curve()

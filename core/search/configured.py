@@ -1,6 +1,7 @@
-"""The search settings with their strategy checked (`GAConfig`), and the strategy that runs them.
+"""The search settings with their strategy checked (`StrategySettings`), and the strategy that
+runs them.
 
-`GAConfig` is `SearchSettings` (`softevo.core.search.settings`: population, generations,
+`StrategySettings` is `SearchSettings` (`softevo.core.search.settings`: population, generations,
 selection, variation rates, descriptors, `algorithm`, the name of a strategy installed in
 the entry-point group `softevo.strategies`, and `options`, that strategy's own settings. Each
 algorithm is a module of its own (`softevo.core.search.paper_ga`, `random_search`, `hillclimb`,
@@ -18,26 +19,26 @@ from softevo.core.limits import MAX_OPTIONS
 from softevo.core.robots.encodings import Encoding
 from softevo.core.search.registry import StrategyError, strategies, strategy_class
 from softevo.core.search.settings import SearchSettings
-from softevo.core.search.state import GAState, Individual, generation_rng
+from softevo.core.search.state import Individual, StrategyState, generation_rng
 from softevo.core.search.strategy import Strategy
 
 __all__ = [
-    "GAConfig",
-    "GAState",
     "Individual",
     "SearchSettings",
     "Strategy",
+    "StrategySettings",
+    "StrategyState",
     "generation_rng",
     "make_strategy",
 ]
 
 
-class GAConfig(SearchSettings):
+class StrategySettings(SearchSettings):
     """The search settings with the strategy they name checked: it is installed, takes these
     settings and validates its own options (what `POST /runs` and `softevo run` build)."""
 
     @model_validator(mode="after")
-    def _archive(self) -> GAConfig:
+    def _archive(self) -> StrategySettings:
         """The named strategy exists, takes these settings and validates its own options; then
         the archive's settings are checked (this validator replaces `SearchSettings`' one of the
         same name, so a strategy's own message comes first, as it always did)."""
@@ -60,7 +61,7 @@ class GAConfig(SearchSettings):
         return self
 
 
-def make_strategy(config: GAConfig, encoding: Encoding) -> Strategy:
+def make_strategy(config: StrategySettings, encoding: Encoding) -> Strategy:
     """The strategy `config.algorithm` names, for `encoding`."""
     return strategy_class(config.algorithm)(config, encoding)
 
@@ -68,7 +69,7 @@ def make_strategy(config: GAConfig, encoding: Encoding) -> Strategy:
 def describe_strategies() -> list[dict[str, Any]]:
     """Every installed strategy as `GET /algorithms` shows it: name, summary, the shared
     settings it reads (with their defaults and descriptions) and its own options' schema."""
-    shared = GAConfig.model_fields
+    shared = StrategySettings.model_fields
     described = []
     for strategy in strategies().values():
         entry = strategy.describe()
