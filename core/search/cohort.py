@@ -76,6 +76,12 @@ class Cohort(ABC):
     def row_done(self) -> bool:
         """Whether the row has all its births told (then `finish`)."""
 
+    @property
+    def growing(self) -> bool:
+        """Whether telling births may breed more before the row ends (then a batch that is not
+        full waits for them, up to a worker's second batch)."""
+        return True
+
     @abstractmethod
     def tell(self, fitness: float, record: dict[str, float], known: Container[str]) -> Birth | None:
         """The oldest birth in the window scored `fitness` and measured `record`; the birth
@@ -119,6 +125,10 @@ class Generation(Cohort):
     @property
     def row_done(self) -> bool:
         return len(self.row) == self.size
+
+    @property
+    def growing(self) -> bool:
+        return False  # every birth of the row was asked at once
 
     def tell(self, fitness: float, record: dict[str, float], known: Container[str]) -> None:
         birth = self.window.popleft()

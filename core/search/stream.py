@@ -57,19 +57,20 @@ class Flights:
     kept: int = -1  # the last birth (number) handed to the hooks
     landings: queue.SimpleQueue[Landing] = field(default_factory=queue.SimpleQueue)
 
-    def free(self, waiting: int) -> bool:
+    def free(self, waiting: int, growing: bool) -> bool:
         """Whether a batch of the `waiting` robots may go out now: while a worker is idle, any
-        batch; a second one per worker (there when the first lands) only a full one, so robots
-        wait to share a call rather than each pay one; never more than `in_flight`."""
+        batch; a second one per worker (there when the first lands) only a full one while the
+        row is `growing` (births to come may fill it), so robots wait to share a call rather
+        than each pay one; never more than `in_flight`."""
         workers = self.evaluator.capacity()
         if self.batches >= min(self.in_flight, 2 * workers):
             return False
-        return self.batches < workers or waiting >= self.batch_size
+        return self.batches < workers or waiting >= self.batch_size or not growing
 
     def portion(self, waiting: int) -> int:
-        """Robots for the next batch: up to a batch, but the `waiting` ones shared evenly among
-        the idle workers (5 on 2: 3 and 2, not 4 and 1), so none idles while another runs a
-        long batch before a barrier (a generation's end)."""
+        """Robots for the next batch of a row asked at once: up to a batch, but the `waiting`
+        ones shared evenly among the idle workers (5 on 2: 3 and 2, not 4 and 1), so none idles
+        while another runs a long batch before the row's end."""
         idle = max(1, self.evaluator.capacity() - self.batches)
         count = min(waiting, max(math.ceil(waiting / self.batch_size), idle))
         return min(self.batch_size, math.ceil(waiting / max(1, count)))
@@ -138,9 +139,11 @@ class _Row:
     def send(self) -> None:
         """Fill free slots with the waiting births (up to a batch each)."""
         flights = self.flights
-        while self.waiting and flights.free(len(self.waiting)):
+        growing = self.cohort.growing
+        while self.waiting and flights.free(len(self.waiting), growing):
             births: list[Birth] = []
-            size = flights.portion(len(self.waiting))
+            # a row asked at once is shared among the idle workers, so none waits at its end
+            size = flights.batch_size if growing else flights.portion(len(self.waiting))
             while self.waiting and len(births) < size:
                 birth = self.waiting.popleft()
                 genome_hash = birth.individual.genome.hash
