@@ -55,6 +55,9 @@ class Flights:
     out: set[str] = field(default_factory=set)  # genome hashes sent and not landed
     batches: int = 0  # batches sent and not landed
     kept: int = -1  # the last birth (number) handed to the hooks
+    #: Whether each landing wakes the step (it may send or tell on it), or only the last one in
+    #: flight: a wake-up costs the step's process more CPU than taking batches in
+    wake_each: bool = True
     landings: queue.SimpleQueue[Landing] = field(default_factory=queue.SimpleQueue)
 
     def free(self, waiting: int, growing: bool) -> bool:
@@ -84,9 +87,12 @@ class Flights:
     def _evaluate(self, births: list[Birth], files: list[dict[str, Any]], key: str) -> None:
         try:
             self.landings.put((births, self.evaluator.evaluate_batch(files, key), None))
-        except BaseException as error:  # the step raises it
+        except BaseException as error:  # the step raises it, at once
             self.landings.put((births, None, error))
-        self.alarm.set()
+            self.alarm.set()
+            return
+        if self.wake_each or self.landings.qsize() >= self.batches:  # or the last in flight
+            self.alarm.set()
 
     def take(self, wait: float) -> list[Landing]:
         """What landed, waiting up to `wait` s (or until the alarm rings) for the first."""
@@ -192,14 +198,17 @@ def stream_step(
                 break
             row.send()
             due = hooks.check()
-            wait = CHECK_SECONDS if due is None else min(CHECK_SECONDS, due - time.monotonic())
-            for births, result, error in flights.take(max(0.0, wait)):
+            late = due is not None and time.monotonic() >= due
+            if late:  # a write is due: what waits for it goes now, and each landing at once
+                hooks.flush()
+            # nothing to send and no birth to come: only the row's last landing (or `due`) counts
+            flights.wake_each = late or cohort.growing or bool(row.waiting)
+            wait = CHECK_SECONDS if due is None or late else due - time.monotonic()
+            for births, result, error in flights.take(min(CHECK_SECONDS, max(0.0, wait))):
                 if error is not None:
                     raise error
                 assert result is not None
                 row.landed(births, result)
-            if due is not None and time.monotonic() >= due:
-                hooks.flush()
     except BaseException:
         for births, result, _error in flights.take(0.0):  # what landed is kept
             if result is not None:
