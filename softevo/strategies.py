@@ -12,7 +12,7 @@ service's takeover of a run all find it (docs/evolution.md, "A strategy of your 
 from __future__ import annotations
 
 from softevo.core.search import operators
-from softevo.core.search.cohort import Birth, Cohort, Told
+from softevo.core.search.cohort import Birth, Cohort, Told, tell_row
 from softevo.core.search.registry import GROUP, StrategyError, strategies, strategy_class
 from softevo.core.search.state import Individual, StrategyState
 from softevo.core.search.strategy import Generational, NoOptions, Records, Strategy
@@ -35,4 +35,5 @@ __all__ = [
     "operators",
     "strategies",
     "strategy_class",
+    "tell_row",
 ]

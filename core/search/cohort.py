@@ -135,12 +135,20 @@ class Generation(Cohort):
         self.row.append((birth.individual, fitness, record, birth.saved))
 
     def finish(self) -> tuple[StrategyState, GenerationStats]:
-        saved = sum(1 for item in self.row if item[3])
-        return self.strategy.tell(
-            self.state,
-            [item[0] for item in self.row],
-            [item[1] for item in self.row],
-            measures=[item[2] for item in self.row],
-            evaluations=len(self.row) - saved,
-            saved=saved,
-        )
+        return tell_row(self.strategy, self.state, self.row)
+
+
+def tell_row(
+    strategy: Generational, state: StrategyState, row: list[Told]
+) -> tuple[StrategyState, GenerationStats]:
+    """The strategy's `tell` of a row's told births, counted as the curve counts them: a
+    birth whose genome an earlier one had is `saved`, every other one an evaluation."""
+    saved = sum(1 for item in row if item[3])
+    return strategy.tell(
+        state,
+        [item[0] for item in row],
+        [item[1] for item in row],
+        measures=[item[2] for item in row],
+        evaluations=len(row) - saved,
+        saved=saved,
+    )

@@ -34,7 +34,7 @@ from pydantic import Field
 
 from softevo.core.search import operators
 from softevo.core.search.archive import Archive
-from softevo.core.search.cohort import Birth, Cohort, Told
+from softevo.core.search.cohort import Birth, Cohort, Told, tell_row
 from softevo.core.search.state import Individual, StrategyState
 from softevo.core.search.stats import GenerationStats
 from softevo.core.search.strategy import Strategy
@@ -323,17 +323,7 @@ class Nursery(Cohort):
 
     def finish(self) -> tuple[StrategyState, GenerationStats]:
         """The state after the row's P births, and its curve row."""
-        individuals = [item[0] for item in self.row]
-        saved = sum(1 for item in self.row if item[3])
-        told, stats = Strategy.tell(
-            self.strategy,
-            self.state,
-            individuals,
-            [item[1] for item in self.row],
-            measures=[item[2] for item in self.row],
-            evaluations=len(self.row) - saved,
-            saved=saved,
-        )
+        told, stats = tell_row(self.strategy, self.state, self.row)
         data = {
             **(told.data or {}),
             KEY: {

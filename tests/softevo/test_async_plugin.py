@@ -36,6 +36,7 @@ from softevo.strategies import (
     Told,
     mutant,
     strategies,
+    tell_row,
 )
 from tests.api.finished import finished
 from tests.core.search.test_steady_state import Shuffled
@@ -129,16 +130,7 @@ class Climb(Cohort):
         return self.add(mutant(config, encoding, self.best, 0, rng), known)
 
     def finish(self) -> tuple[StrategyState, Any]:
-        saved = sum(1 for item in self.row if item[3])
-        told, stats = Strategy.tell(
-            self.strategy,
-            self.state,
-            [item[0] for item in self.row],
-            [item[1] for item in self.row],
-            measures=[item[2] for item in self.row],
-            evaluations=len(self.row) - saved,
-            saved=saved,
-        )
+        told, stats = tell_row(self.strategy, self.state, self.row)
         climb = {
             "told": self.told,
             "best": None if self.best is None else self.best.to_json(),
