@@ -1,5 +1,5 @@
-"""A streaming strategy's births as a driver finds them when it takes a run over: the members
-bred (and perhaps evaluated) past the last committed generation, read once."""
+"""A run's births as a driver finds them when it takes the run over: the members asked (and
+perhaps evaluated) in the rows after the last committed one, read once."""
 
 from __future__ import annotations
 
@@ -14,8 +14,8 @@ def stored_births(
     db: Database, run_id: int, since: int
 ) -> dict[tuple[int, int], tuple[str, float | None, dict[str, float]]]:
     """The members stored in generations `since` and later, by (generation, index): genome
-    hash, fitness (None: not evaluated yet; NaN: failed) and record of measures. A streaming
-    strategy's births in flight, read once when a driver takes the run over."""
+    hash, fitness (None: not evaluated yet; NaN: failed) and record of measures. The births in
+    flight, read once when a driver takes the run over."""
     columns = INDIVIDUALS.c
     with db.read_session() as session:
         rows = session.execute(
