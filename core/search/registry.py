@@ -41,6 +41,12 @@ def strategies() -> dict[str, type[Strategy]]:
             ) from None
         if not _is_strategy(loaded):
             raise StrategyError(f"algorithm {point.name!r}: {point.value} is not a Strategy")
+        missing = sorted(getattr(loaded, "__abstractmethods__", ()))
+        if missing:
+            raise StrategyError(
+                f"algorithm {point.name!r}: {point.value} does not implement "
+                f"{', '.join(missing)} (one that breeds whole generations subclasses Generational)"
+            )
         if loaded.name != point.name:
             raise StrategyError(
                 f"algorithm {point.name!r}: {point.value} calls itself {loaded.name!r}"

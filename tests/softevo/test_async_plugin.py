@@ -32,6 +32,7 @@ from softevo.strategies import (
     Cohort,
     Individual,
     Strategy,
+    StrategyError,
     StrategyState,
     Told,
     mutant,
@@ -140,20 +141,43 @@ class Climb(Cohort):
         return replace(told, data={**(told.data or {}), "climb": climb}), stats
 
 
+class BreedOnly(Strategy):
+    """A generational strategy written against `Strategy` alone: refused, saying what to do."""
+
+    name = "breed-only"
+    summary = "breeds, but is no Generational"
+
+
+def _site(root: Path, name: str, target: str) -> Path:
+    """A dist-info folder registering `target` as `name`, as an installed package has it."""
+    dist = root / f"{name.replace('-', '_')}-0.1.dist-info"
+    dist.mkdir(parents=True)
+    (dist / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {name}\nVersion: 0.1\n")
+    (dist / "entry_points.txt").write_text(f"[{GROUP}]\n{name} = {target}\n")
+    return root
+
+
 @pytest.fixture(scope="module")
 def registered(tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
     """This module's strategy in the entry-point group, as an installed package puts it."""
-    root = tmp_path_factory.mktemp("site")
-    dist = root / "async_climber-0.1.dist-info"
-    dist.mkdir()
-    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: async-climber\nVersion: 0.1\n")
-    target = f"{__name__}:AsyncClimber"
-    (dist / "entry_points.txt").write_text(f"[{GROUP}]\n{NAME} = {target}\n")
+    root = _site(tmp_path_factory.mktemp("site"), NAME, f"{__name__}:AsyncClimber")
     sys.path.insert(0, str(root))
     strategies.cache_clear()
     yield
     sys.path.remove(str(root))
     strategies.cache_clear()
+
+
+def test_a_strategy_that_implements_too_little_is_refused_in_one_line(tmp_path: Path) -> None:
+    root = _site(tmp_path, "breed-only", f"{__name__}:BreedOnly")
+    sys.path.insert(0, str(root))
+    strategies.cache_clear()
+    try:
+        with pytest.raises(StrategyError, match="does not implement check_state, cohort"):
+            strategies()
+    finally:
+        sys.path.remove(str(root))
+        strategies.cache_clear()
 
 
 def _run(evaluator: Any, **changes: Any) -> Evolution:
