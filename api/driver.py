@@ -73,7 +73,6 @@ class RunDriver(Hooks):
         self.generation: int | None = None  # the generation being evaluated
         self.members: list[Member] = []  # births asked and not written yet
         self.stored: dict[tuple[int, int], Any] | None = None  # its births found at takeover
-        self.last_birth = (-1, -1)  # (generation, index) of the last birth kept
 
     # -- control -------------------------------------------------------------------------------
 
@@ -106,16 +105,14 @@ class RunDriver(Hooks):
     def births(
         self, generation: int, individuals: dict[int, Individual]
     ) -> tuple[dict[int, float], dict[int, dict[str, float]]]:
-        """Births are written with the next write (a row's commit keeps the next row's); the
-        first call (after a takeover) finds those a predecessor kept, and what it evaluated."""
+        """Each birth (the step hands it over once) is written with the next write (a row's
+        commit keeps the next row's); the first call (after a takeover) finds those a
+        predecessor kept, and what it evaluated."""
         if self.stored is None:
             self.stored = store.births.stored_births(self.db, self.run_id, generation)
         known: dict[int, float] = {}
         records: dict[int, dict[str, float]] = {}
         for index, individual in individuals.items():
-            if (generation, index) <= self.last_birth:  # kept before (a step's window)
-                continue
-            self.last_birth = (generation, index)
             found = self.stored.pop((generation, index), None)
             if found is None:
                 self.members.append((generation, index, members([individual])[0]))

@@ -174,9 +174,15 @@ def split_evenly(items: Sequence[int], size: int, workers: int) -> list[list[int
     n = len(items)
     if n == 0:
         return []
-    count = min(n, max(math.ceil(n / max(1, size)), workers))
+    count = batch_count(n, size, workers)
     bounds = [-(-i * n // count) for i in range(count + 1)]  # ceil: longer batches first
     return [list(items[a:b]) for a, b in itertools.pairwise(bounds)]
+
+
+def batch_count(n: int, size: int, workers: int) -> int:
+    """How many batches `split_evenly` cuts `n` (> 0) items into: enough for batches of at most
+    `size`, and at least `workers`, but no more than the items."""
+    return min(n, max(math.ceil(n / max(1, size)), workers))
 
 
 def batch_digest(robot_files: Sequence[dict[str, Any]]) -> str:

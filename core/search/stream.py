@@ -22,7 +22,14 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from softevo.core.evaluator import CHECK_SECONDS, BatchResult, Evaluator, hand_over, names_digest
+from softevo.core.evaluator import (
+    CHECK_SECONDS,
+    BatchResult,
+    Evaluator,
+    batch_count,
+    hand_over,
+    names_digest,
+)
 from softevo.core.search.cohort import Birth, Cohort
 from softevo.core.search.state import Individual, StrategyState
 from softevo.core.search.step import Hooks, Step
@@ -72,11 +79,10 @@ class Flights:
 
     def portion(self, waiting: int) -> int:
         """Robots for the next batch of a row asked at once: up to a batch, but the `waiting`
-        ones shared evenly among the idle workers (5 on 2: 3 and 2, not 4 and 1), so none idles
-        while another runs a long batch before the row's end."""
+        ones shared evenly among the idle workers as `split_evenly` cuts them (5 on 2: 3 and 2,
+        not 4 and 1), so none idles while another runs a long batch before the row's end."""
         idle = max(1, self.evaluator.capacity() - self.batches)
-        count = min(waiting, max(math.ceil(waiting / self.batch_size), idle))
-        return min(self.batch_size, math.ceil(waiting / max(1, count)))
+        return math.ceil(waiting / batch_count(waiting, self.batch_size, idle))
 
     def send(self, births: list[Birth], files: list[dict[str, Any]], key: str) -> None:
         names = [birth.individual.genome.hash for birth in births]
@@ -91,7 +97,9 @@ class Flights:
             self.landings.put((births, None, error))
             self.alarm.set()
             return
-        if self.wake_each or self.landings.qsize() >= self.batches:  # or the last in flight
+        # or the last in flight (`batches` is the step's; it changes only while the step is
+        # awake, and then it takes what landed before it sleeps again)
+        if self.wake_each or self.landings.qsize() >= self.batches:
             self.alarm.set()
 
     def take(self, wait: float) -> list[Landing]:
