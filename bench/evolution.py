@@ -1,8 +1,9 @@
 """Evolution benchmark: `python bench/evolution.py [--quick]`.
 
 Prints, for the `paper-voxel` preset (4x4x4, population 25, 10 s simulations of 20,000 steps):
-evaluations per second through the serial evaluator and a local pool of 1 and 2 processes (the
-same 50 random robots, results checked identical), then one whole run with the default pool:
+evaluations per second through the serial evaluator and a local pool of 1 and 2 processes (one
+generation of 50 random robots through the generation step, the same robots for each, results
+checked identical), then one whole run with the default pool:
 its wall time (target: under 60 s on a 2-core machine), simulations run and the share of
 individuals whose fitness came from the hash cache.
 """
@@ -10,30 +11,32 @@ individuals whose fitness came from the hash cache.
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import platform
 import time
 
 import numpy as np
 
-from softevo.core.config import resolve
-from softevo.core.evaluator import evaluate_in_batches
+from softevo.core.config import RunConfig, resolve
+from softevo.core.evaluator import Evaluator
 from softevo.core.evolution import Evolution
 from softevo.core.physics.evaluation import PoolEvaluator, SerialEvaluator
-from softevo.core.robots.robot_file import robot_to_json
 
 
-def evaluations_per_second(files: list[dict], evaluator, repeats: int) -> tuple[float, np.ndarray]:
-    # about two batches per process, as the generation step cuts a large generation
-    size = max(1, math.ceil(len(files) / (2 * evaluator.capacity())))
-    evaluate_in_batches(evaluator, files[:2], batch_size=1)  # warm: every process has its kernels
-    times, result = [], None
-    for _ in range(repeats):
+def evaluations_per_second(
+    config: RunConfig, evaluator: Evaluator, repeats: int
+) -> tuple[float, np.ndarray]:
+    """One generation of `config` (a random search) through the step, `repeats` times, each
+    with a fresh cache; the first, untimed, warms every process's kernels."""
+    times, fitness = [], np.empty(0)
+    for repeat in range(repeats + 1):
+        evolution = Evolution.start(config)
         started = time.perf_counter()
-        result = evaluate_in_batches(evaluator, files, batch_size=size)
-        times.append(time.perf_counter() - started)
-    return len(files) / float(np.median(times)), result
+        evolution.step(evaluator)
+        if repeat:
+            times.append(time.perf_counter() - started)
+        fitness = np.asarray(evolution.state.previous_fitness, dtype=np.float64)
+    return len(fitness) / float(np.median(times)), fitness
 
 
 def main() -> None:
@@ -43,11 +46,10 @@ def main() -> None:
     config = resolve({"preset": "paper-voxel", "seed": 1})
     if args.quick:
         config = resolve({"preset": "paper-voxel", "seed": 1, "generations": 10})
-    encoding, rng = config.make_encoding(), np.random.default_rng(0)
     n_robots = 12 if args.quick else 50
-    files = [
-        robot_to_json(encoding.to_robot(encoding.random(rng), config.sim)) for _ in range(n_robots)
-    ]
+    robots = resolve(
+        {"preset": "paper-voxel", "seed": 1, "algorithm": "random", "population": n_robots}
+    )
     repeats = 1 if args.quick else 3
 
     print(
@@ -56,11 +58,11 @@ def main() -> None:
     )
     print(f"paper-voxel robots: {n_robots} random 4x4x4, {config.sim.n_steps} steps each\n")
     print(f"{'evaluator':<24}{'evaluations/s':>15}{'vs serial':>11}")
-    serial_rate, reference = evaluations_per_second(files, SerialEvaluator(), repeats)
+    serial_rate, reference = evaluations_per_second(robots, SerialEvaluator(), repeats)
     print(f"{'serial (this process)':<24}{serial_rate:>15.2f}{1.0:>11.2f}")
     for processes in (1, 2):
         with PoolEvaluator(processes) as pool:
-            rate, result = evaluations_per_second(files, pool, repeats)
+            rate, result = evaluations_per_second(robots, pool, repeats)
         same = np.array_equal(result, reference, equal_nan=True)
         label = f"pool, {processes} process{'es' if processes > 1 else ''}"
         print(f"{label:<24}{rate:>15.2f}{rate / serial_rate:>11.2f}   identical to serial: {same}")

@@ -48,6 +48,7 @@ import sys
 import tempfile
 import time
 from collections import Counter, defaultdict
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
@@ -60,7 +61,7 @@ from rq import Worker
 
 from softevo.api.settings import Settings
 from softevo.core.config import resolve
-from softevo.core.evaluator import evaluate_in_batches, split_evenly
+from softevo.core.evaluator import split_evenly
 from softevo.core.evolution import Evolution
 from softevo.core.physics.evaluation import PoolEvaluator
 from softevo.core.robots.robot import VoxelRobot
@@ -358,7 +359,8 @@ class EvolutionPath:
             VoxelRobot((1, 1, 1), ("hard",), sim=sim_settings({"duration": 0.01, "settle_time": 0}))
         )
         # untimed: both pool processes started and warm
-        evaluate_in_batches(self.pool, [tiny] * 4, batch_size=1)
+        with ThreadPoolExecutor(4) as hands:
+            list(hands.map(lambda i: self.pool.evaluate_batch([tiny], f"warm-{i}"), range(4)))
 
     def close(self) -> None:
         self.pool.close()

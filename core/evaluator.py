@@ -14,10 +14,7 @@ import itertools
 import json
 import math
 import os
-import threading
-import time
 from abc import ABC, abstractmethod
-from collections import deque
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -25,7 +22,6 @@ from typing import Any, Self
 
 import numpy as np
 
-from softevo.core.limits import BATCH_SIZE, IN_FLIGHT
 from softevo.core.nulls import Record, from_null, from_null_record, from_nulls
 
 #: The job function's output, JSON-safe: `fitness`, a number or None (failed) per robot,
@@ -170,7 +166,8 @@ class Evaluator(ABC):
 def split_evenly(items: Sequence[int], size: int, workers: int) -> list[list[int]]:
     """Contiguous batches of at most `size`, but at least `workers` of them (when there are that
     many items) and of near-equal length, so a generation's few new robots keep every worker busy
-    instead of one batch of 4 leaving the others idle at the generation barrier."""
+    instead of one batch of 4 leaving the others idle at the generation barrier: the sizes the
+    step's `Flights.portion` gives a row asked at once on idle workers, batch after batch."""
     n = len(items)
     if n == 0:
         return []
@@ -192,7 +189,8 @@ def batch_digest(robot_files: Sequence[dict[str, Any]]) -> str:
 
 
 def names_digest(names: Sequence[str]) -> str:
-    """16 hex digits naming a batch by its robots' names (`evaluate_in_batches`' `names`)."""
+    """16 hex digits naming a batch by its robots' names (the step's: their genome hashes,
+    cheaper than encoding every file again)."""
     return hashlib.sha256(",".join(names).encode()).hexdigest()[:16]
 
 
@@ -225,141 +223,3 @@ def hand_over(work: Callable[..., None], *args: Any) -> None:
 #: Longest the step's thread waits between calls of `check` while batches run, when nothing
 #: (the last batch, a due one, the caller's alarm) wakes it sooner.
 CHECK_SECONDS = 1.0
-
-#: What a batch thread hands back: the batch's positions, its result or what it raised.
-Landing = tuple[list[int], BatchResult | None, BaseException | None]
-
-
-class _Landings:
-    """The batches of one call that landed and were not taken in yet. The step's thread is woken
-    when the last one lands or one fails, when one lands once the caller wants batches at once
-    (`due`, a `time.monotonic()`: to save them), or by the caller's `alarm` (a stop); otherwise
-    it sleeps up to CHECK_SECONDS: a wake-up costs this process more CPU than taking batches in."""
-
-    def __init__(self, expected: int, alarm: threading.Event | None) -> None:
-        self.expected, self.arrived, self.failed = expected, 0, False
-        self.items: list[Landing] = []
-        self.due: float | None = None
-        self.lock = threading.Lock()
-        self.ready = threading.Event() if alarm is None else alarm
-        self.ready.clear()  # a stop that came before is seen by the `check` that comes first
-
-    def put(self, landing: Landing) -> None:
-        with self.lock:
-            self.items.append(landing)
-            self.arrived += 1
-            self.failed = self.failed or landing[2] is not None
-            if self._finished() or (self.due is not None and time.monotonic() >= self.due):
-                self.ready.set()
-
-    def _finished(self) -> bool:
-        return self.failed or self.arrived == self.expected
-
-    def take(self, due: float | None) -> list[Landing]:
-        """What landed, once the rest is in (or one failed) or once `due` passed (None: only at
-        the end); [] when the alarm rang or CHECK_SECONDS passed before."""
-        with self.lock:
-            self.due, wait = due, CHECK_SECONDS
-            if self.items and due is not None:
-                wait = min(wait, max(0.0, due - time.monotonic()))
-        self.ready.wait(wait)
-        with self.lock:
-            finished = self._finished()
-            if not finished:  # (a stop that rings now is seen by the next `check`)
-                self.ready.clear()
-            if not finished and (due is None or time.monotonic() < due):
-                return []
-            items, self.items = self.items, []
-        return items
-
-    def drain(self) -> list[Landing]:
-        """Whatever landed, at once."""
-        with self.lock:
-            items, self.items = self.items, []
-        return items
-
-
-def _hand_over(
-    evaluator: Evaluator,
-    files: list[dict[str, Any]],
-    names: Sequence[str] | None,
-    key: str,
-    waiting: deque[list[int]],
-    landed: _Landings,
-    stopped: threading.Event,
-) -> None:
-    """One of an `evaluate_in_batches` call's threads: hands its batches over in order, one at a
-    time, until none is left or the step stopped (it goes straight on to the next batch: no
-    other thread is woken for it)."""
-    while not stopped.is_set():
-        try:
-            batch = waiting.popleft()
-        except IndexError:
-            return
-        chunk = [files[i] for i in batch]
-        digest = batch_digest(chunk) if names is None else names_digest([names[i] for i in batch])
-        try:
-            landed.put((batch, evaluator.evaluate_batch(chunk, f"{key}-{digest}"), None))
-        except BaseException as error:  # the step raises it; the others stop handing over
-            landed.put((batch, None, error))
-            return
-
-
-def evaluate_in_batches(
-    evaluator: Evaluator,
-    robot_files: Sequence[dict[str, Any]],
-    key: str = "local",
-    *,
-    batch_size: int = BATCH_SIZE,
-    in_flight: int = IN_FLIGHT,
-    check: Callable[[], float | None] | None = None,
-    on_batch: Callable[[list[int], BatchResult], None] | None = None,
-    names: Sequence[str] | None = None,
-    alarm: threading.Event | None = None,
-) -> np.ndarray:
-    """Every file's speed (in order), evaluated in batches of at most `batch_size`, at least
-    `evaluator.capacity()` of them, at most `in_flight` (and two per worker) at once: as many
-    threads, each handing over the next batch when its last one lands. `check` is called while
-    they run, at least every CHECK_SECONDS and at once when another thread sets `alarm`: it
-    raises to stop (batches not yet handed to the evaluator are dropped; those that landed are
-    given to `on_batch` first), or returns the `time.monotonic()` from which `on_batch` should
-    hear of a batch as soon as it lands (None: at the end is soon enough). `on_batch` hears of
-    each batch (its positions in `robot_files`, its result) by then, or at the end. A batch's
-    key is `key`, a dash and a digest of its content: of its files' canonical JSON, or of their
-    `names` where the caller has them (one per file, each naming its content within `key`, such
-    as a generation's genome hashes: cheaper than encoding every file again)."""
-    files = list(robot_files)
-    if names is not None and len(names) != len(files):
-        raise ValueError(f"{len(names)} names for {len(files)} robot files")
-    fitness = np.full(len(files), np.nan)
-    if not files:
-        return fitness
-    capacity = evaluator.capacity()
-    waiting = deque(split_evenly(range(len(files)), batch_size, capacity))
-    # at most two batches per worker handed over at once: enough to keep every worker busy, and
-    # when `check` stops the step (a cancel) the batches not yet handed over are dropped
-    threads = max(1, min(len(waiting), in_flight, 2 * capacity))
-    outstanding = len(waiting)
-    landed, stopped = _Landings(outstanding, alarm), threading.Event()
-    try:
-        for _ in range(threads):
-            _HANDS.submit(_hand_over, evaluator, files, names, key, waiting, landed, stopped)
-        while outstanding:
-            due = None if check is None else check()
-            for batch, result, error in landed.take(due):
-                outstanding -= 1
-                if error is not None:
-                    raise error
-                assert result is not None
-                if on_batch is not None:
-                    on_batch(batch, result)
-                fitness[batch] = np.asarray(result.fitness, dtype=np.float64)
-    except BaseException:
-        if on_batch is not None:  # a stop: what landed is not lost with the step
-            for batch, result, _error in landed.drain():
-                if result is not None:
-                    on_batch(batch, result)
-        raise
-    finally:
-        stopped.set()  # batches not handed over yet never will be
-    return fitness

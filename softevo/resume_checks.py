@@ -89,11 +89,10 @@ def _check_state_json(state: Any) -> None:
     for name in ("seed", "generation"):
         _expect(_is_int(state.get(name)), f"state.json: {name}", "an integer", state.get(name))
     _expect(state["generation"] >= 0, "state.json: generation", "0 or more", state["generation"])
-    for name in ("current", "previous"):
-        items = state.get(name)
-        _expect(items is None or isinstance(items, list), f"state.json: {name}", "a list", items)
-        for i, item in enumerate(items or []):
-            _check_individual_json(item, f"state.json: {name}[{i}]")
+    items = state.get("previous")
+    _expect(items is None or isinstance(items, list), "state.json: previous", "a list", items)
+    for i, item in enumerate(items or []):
+        _check_individual_json(item, f"state.json: previous[{i}]")
     fitness = state.get("previous_fitness")
     _expect(
         fitness is None or isinstance(fitness, list),
@@ -224,17 +223,14 @@ def _check_state(config: RunConfig, state: StrategyState, raw: dict[str, Any]) -
         raise ResumeError(f"state.json: previous is null at generation {state.generation}")
     encoding = config.make_encoding()
     size = config.population
-    for name in ("current", "previous"):
-        items = getattr(state, name)
-        if items is None:
-            continue
-        if len(items) != size:
-            raise ResumeError(
-                f"state.json: {name} holds {len(items)} individuals, but "
-                f"config.json's population is {size}"
-            )
-        for i, item in enumerate(items):
-            _check_genome(encoding, item.genome, f"state.json: {name}[{i}].genome")
+    items = state.previous or []
+    if state.previous is not None and len(items) != size:
+        raise ResumeError(
+            f"state.json: previous holds {len(items)} individuals, but "
+            f"config.json's population is {size}"
+        )
+    for i, item in enumerate(items):
+        _check_genome(encoding, item.genome, f"state.json: previous[{i}].genome")
     try:  # what the strategy keeps of its own (parents, births in flight)
         make_strategy(config.strategy_settings(), encoding).check_state(state)
     except ValueError as error:

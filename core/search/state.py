@@ -43,11 +43,11 @@ def generation_rng(seed: int, generation: int) -> np.random.Generator:
 
 @dataclass
 class StrategyState:
-    """Everything needed to go on: the generation being evaluated and the last one evaluated."""
+    """Everything needed to go on: the row to run next and the last generation told (the next
+    row's births are a function of these and the seed, so they are not stored)."""
 
     seed: int
     generation: int = 0
-    current: list[Individual] | None = None
     previous: list[Individual] | None = None
     previous_fitness: list[float] | None = None
     best: tuple[Genome, float, int] | None = None  # genome, fitness, generation
@@ -70,7 +70,6 @@ class StrategyState:
             **data,
             "seed": self.seed,
             "generation": self.generation,
-            "current": individuals(self.current),
             "previous": individuals(self.previous),
             "previous_fitness": _floats_to_json(self.previous_fitness),
             "best": None
@@ -97,7 +96,6 @@ class StrategyState:
         }
         parts = [
             json.dumps(plain)[:-1],  # without its closing brace
-            f', "current": {_individuals_text(self.current)}',
             f', "previous": {_individuals_text(self.previous)}',
         ]
         if self.best is None:
@@ -122,7 +120,6 @@ class StrategyState:
         return cls(
             seed=int(data["seed"]),
             generation=int(data["generation"]),
-            current=individuals(data.get("current")),
             previous=individuals(data.get("previous")),
             previous_fitness=_floats_from_json(data.get("previous_fitness")),
             best=None

@@ -164,7 +164,6 @@ class Strategy(ABC):
         following = StrategyState(
             seed=state.seed,
             generation=state.generation + 1,
-            current=None,
             previous=list(individuals),
             previous_fitness=values.tolist(),
             best=best,
@@ -236,20 +235,17 @@ class Generational(Strategy):
     def check_state(self, state: StrategyState) -> None:
         """Parents index the previous generation."""
         size = self.config.population
-        for name in ("current", "previous"):
-            for i, item in enumerate(getattr(state, name) or []):
-                if any(parent >= size for parent in item.parents):
-                    raise ValueError(
-                        f"{name}[{i}].parents: {list(item.parents)} indexes past a generation "
-                        f"of {size}"
-                    )
+        for i, item in enumerate(state.previous or []):
+            if any(parent >= size for parent in item.parents):
+                raise ValueError(
+                    f"previous[{i}].parents: {list(item.parents)} indexes past a generation "
+                    f"of {size}"
+                )
 
     def ask(self, state: StrategyState) -> list[Individual]:
         """The generation to evaluate next (always the same for one state)."""
         if self.done(state):
             raise RuntimeError(f"the run has finished its {self.config.generations} generations")
-        if state.current is not None:
-            return list(state.current)
         rng = generation_rng(state.seed, state.generation)
         if state.generation == 0 or state.previous is None or state.previous_fitness is None:
             return self.first(rng)

@@ -1,10 +1,14 @@
-"""How the coordinator cuts a generation's new robots into batches (`split_evenly`)."""
+"""How the step cuts a row's new robots into batches on idle workers (`split_evenly`, whose
+sizes `Flights.portion` gives batch after batch)."""
 
 from __future__ import annotations
 
+import threading
+
 import pytest
 
-from softevo.core.evaluator import split_evenly
+from softevo.core.evaluator import BatchResult, Evaluator, split_evenly
+from softevo.core.search.stream import Flights
 
 
 @pytest.mark.parametrize("n", range(0, 30))
@@ -28,39 +32,31 @@ def test_few_new_robots_are_spread_over_the_workers() -> None:
     assert split_evenly(list(range(9)), 4, 1) == [[0, 1, 2], [3, 4, 5], [6, 7, 8]]
 
 
-def test_a_stopped_evaluation_hands_over_no_more_batches() -> None:
-    """Cancel stops the compute: once `check` raises, the batches not yet handed to the
-    evaluator are dropped; at most two per worker were ever out."""
-    import threading
+class Workers(Evaluator):
+    """Only its number of workers is read."""
 
-    import numpy as np
-    import pytest
+    def __init__(self, workers: int) -> None:
+        self.workers = workers
 
-    from softevo.core.evaluator import BatchResult, Evaluator, evaluate_in_batches
+    def evaluate_batch(self, robot_files: object, key: str | None = None) -> BatchResult:
+        raise AssertionError("nothing is evaluated")
 
-    release, started = threading.Event(), []
+    def capacity(self) -> int:
+        return self.workers
 
-    class Slow(Evaluator):
-        def evaluate_batch(self, robot_files, key=None):  # type: ignore[no-untyped-def]
-            started.append(key)
-            release.wait(10)
-            return BatchResult(np.zeros(len(robot_files)), "slow", 0.0)
-
-        def capacity(self) -> int:
-            return 2
-
-        def close(self) -> None:
-            pass
-
-    class StoppedError(Exception):
+    def close(self) -> None:
         pass
 
-    def check() -> None:
-        if len(started) >= 4:
-            raise StoppedError
 
-    files = [{"robot": i} for i in range(80)]  # 20 batches of 4
-    with pytest.raises(StoppedError):
-        evaluate_in_batches(Slow(), files, batch_size=4, check=check)
-    release.set()
-    assert len(started) == 4  # two per worker out; the other 16 never handed over
+@pytest.mark.parametrize("n", range(1, 40))
+@pytest.mark.parametrize("size", [1, 3, 4, 8])
+@pytest.mark.parametrize("workers", [1, 2, 5, 64])
+def test_the_step_cuts_a_row_asked_at_once_as_split_evenly_does(
+    n: int, size: int, workers: int
+) -> None:
+    flights, waiting, sizes = Flights(Workers(workers), size, 64, threading.Event()), n, []
+    while waiting:
+        sizes.append(flights.portion(waiting))
+        waiting -= sizes[-1]
+        flights.batches += 1  # the batch went out: one worker fewer idle
+    assert sorted(sizes) == sorted(len(batch) for batch in split_evenly(range(n), size, workers))

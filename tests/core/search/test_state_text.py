@@ -48,8 +48,19 @@ def test_the_state_text_parses_to_its_json(request_: dict) -> None:
         state, _ = algorithm.tell(
             state, individuals, fitness, evaluations=len(individuals), saved=0
         )
-        if generation % 2:
-            state.current = algorithm.ask(state)  # as the coordinator keeps the next generation
     assert checked == 8
     if config.algorithm == "map-elites":
         assert state.archive is not None and state.archive.elites
+
+
+def test_a_state_stored_with_its_next_generation_bred_goes_on_the_same() -> None:
+    """States written before births were kept with the store held the next generation as
+    `current`: it is bred again from the seed and `previous`, so it is read past."""
+    config = resolve({"preset": "quick", "population": 6, "generations": 3, "seed": 2})
+    algorithm = make_strategy(config.strategy_settings(), config.make_encoding())
+    first = algorithm.ask(algorithm.start(2))
+    state, _ = algorithm.tell(algorithm.start(2), first, np.arange(6.0))
+    bred = algorithm.ask(state)
+    old = {**state.to_json(), "current": [item.to_json() for item in bred]}
+    loaded = StrategyState.from_json(old)
+    assert "current" not in loaded.to_json() and algorithm.ask(loaded) == bred
